@@ -1,0 +1,132 @@
+// Graph construction, validation and listing (see graph.h).
+#include "graph/graph.h"
+
+#include <fmt/format.h>
+
+#include <stdexcept>
+
+namespace ssc {
+
+const char* domain_name(Domain d) {
+  switch (d) {
+    case Domain::Scalar: return "scalar";
+    case Domain::Cell: return "cell";
+    case Domain::Node: return "node";
+    case Domain::Point: return "point";
+    case Domain::Band: return "band";
+  }
+  return "?";
+}
+
+const char* access_name(Access a) {
+  switch (a) {
+    case Access::Pointwise: return "pointwise";
+    case Access::Gather: return "gather";
+    case Access::ScatterAdd: return "scatter-add";
+    case Access::Reduction: return "reduction";
+    case Access::Opaque: return "opaque";
+  }
+  return "?";
+}
+
+const char* op_kind_name(OpKind k) {
+  switch (k) {
+    case OpKind::Lame: return "lame";
+    case OpKind::NodeMass: return "node_mass";
+    case OpKind::Corotation: return "corotation";
+    case OpKind::CorotationForce: return "corotation_force";
+    case OpKind::ContactForce: return "contact_force";
+    case OpKind::NodeForce: return "node_force";
+    case OpKind::StiffnessApply: return "stiffness_apply";
+    case OpKind::NewmarkRhs: return "newmark_rhs";
+    case OpKind::NewmarkSolve: return "newmark_solve";
+    case OpKind::VelocityUpdate: return "velocity_update";
+    case OpKind::ExtensionSolve: return "extension_solve";
+  }
+  return "?";
+}
+
+static int find_slot(const std::vector<OpArg>& args, const std::string& slot, OpKind kind) {
+  for (const OpArg& a : args)
+    if (a.slot == slot) return a.tensor;
+  throw std::logic_error(fmt::format("op {} has no argument '{}'", op_kind_name(kind), slot));
+}
+
+int OpNode::input(const std::string& slot) const { return find_slot(inputs, slot, kind); }
+int OpNode::output(const std::string& slot) const { return find_slot(outputs, slot, kind); }
+
+int Graph::add_tensor(const std::string& name, Domain domain, int components, TensorInfo::Role role,
+                      DType dtype) {
+  if (find_tensor(name) >= 0) throw std::logic_error("duplicate tensor name " + name);
+  TensorInfo t;
+  t.name = name;
+  t.domain = domain;
+  t.components = components;
+  t.role = role;
+  t.dtype = dtype;
+  tensors_.push_back(t);
+  return int(tensors_.size()) - 1;
+}
+
+int Graph::add_op(OpKind kind, Domain domain, std::vector<OpArg> inputs, const std::vector<NewOutput>& outputs) {
+  OpNode op{kind, domain, std::move(inputs), {}};
+  const int index = int(ops_.size());
+  for (const NewOutput& o : outputs) {
+    const int id = add_tensor(o.name, o.domain, o.components, TensorInfo::Role::Intermediate);
+    tensors_[id].producer = index;
+    op.outputs.push_back({o.slot, id, o.domain == domain ? Access::Pointwise : Access::Opaque});
+  }
+  ops_.push_back(std::move(op));
+  return index;
+}
+
+int Graph::find_tensor(const std::string& name) const {
+  for (size_t i = 0; i < tensors_.size(); ++i)
+    if (tensors_[i].name == name) return int(i);
+  return -1;
+}
+
+void Graph::validate() const {
+  for (size_t o = 0; o < ops_.size(); ++o) {
+    const OpNode& op = ops_[o];
+    for (const OpArg& a : op.inputs) {
+      if (a.tensor < 0 || a.tensor >= int(tensors_.size()))
+        throw std::logic_error(fmt::format("op {} ({}): input '{}' is unbound", o, op_kind_name(op.kind), a.slot));
+      const TensorInfo& t = tensors_[a.tensor];
+      if (t.role == TensorInfo::Role::Intermediate && t.producer >= int(o))
+        throw std::logic_error(fmt::format("op {} ({}) reads '{}' before op {} writes it", o,
+                                           op_kind_name(op.kind), t.name, t.producer));
+      if (a.access == Access::Pointwise && t.domain != op.domain && t.domain != Domain::Scalar)
+        throw std::logic_error(fmt::format("op {} ({}) reads '{}' ({}) pointwise over domain {}", o,
+                                           op_kind_name(op.kind), t.name, domain_name(t.domain),
+                                           domain_name(op.domain)));
+    }
+    for (const OpArg& a : op.outputs) {
+      const TensorInfo& t = tensors_[a.tensor];
+      if (t.producer != int(o))
+        throw std::logic_error(fmt::format("tensor '{}' is written by op {} but owned by op {}", t.name, o,
+                                           t.producer));
+    }
+  }
+}
+
+std::string Graph::describe() const {
+  std::string s = "tensors:\n";
+  for (size_t i = 0; i < tensors_.size(); ++i) {
+    const TensorInfo& t = tensors_[i];
+    const char* role = t.role == TensorInfo::Role::Input ? "input" : t.role == TensorInfo::Role::State ? "state" : "value";
+    s += fmt::format("  %{:<3} {:<22} {:<6} x{} {}\n", i, t.name, domain_name(t.domain), t.components, role);
+  }
+  s += "ops:\n";
+  for (size_t o = 0; o < ops_.size(); ++o) {
+    const OpNode& op = ops_[o];
+    s += fmt::format("  [{}] {} over {}\n", o, op_kind_name(op.kind), domain_name(op.domain));
+    for (const OpArg& a : op.inputs)
+      s += fmt::format("      in  {:<12} %{} {} ({})\n", a.slot, a.tensor, tensors_[a.tensor].name, access_name(a.access));
+    for (const OpArg& a : op.outputs)
+      s += fmt::format("      out {:<12} %{} {}\n", a.slot, a.tensor, tensors_[a.tensor].name);
+  }
+  return s;
+}
+
+}  // namespace ssc

@@ -1,0 +1,250 @@
+// Construction of the simulation grid from a rest SDF (see sim_grid.h for the rules).
+#include "models/grid/sim_grid.h"
+
+#include <fmt/format.h>
+
+#include <array>
+#include <cmath>
+#include <deque>
+#include <map>
+
+#include "models/grid/cut_cell.h"
+#include "models/io/errors.h"
+
+namespace ssc {
+namespace {
+
+void apply_zero_cutoff(SdfGrid& sdf, double zero_cutoff) {
+  const double limit = zero_cutoff * sdf.cell_size;
+  for (double& v : sdf.phi)
+    if (std::abs(v) < limit) v = 0.0;
+}
+
+std::array<long, 8> corner_indices(const SdfGrid& sdf, long origin) {
+  const long nx = sdf.size.x(), nxy = nx * sdf.size.y();
+  std::array<long, 8> idx;
+  for (int c = 0; c < 8; ++c) idx[c] = origin + (c & 1) + ((c >> 1) & 1) * nx + ((c >> 2) & 1) * nxy;
+  return idx;
+}
+
+void find_active_cells(SimGrid& g) {
+  const SdfGrid& s = g.sdf;
+  g.cell_at_origin.assign(s.node_count(), -1);
+  std::vector<char> active_node(s.node_count(), 0);
+  for (int k = 0; k + 1 < s.size.z(); ++k)
+    for (int j = 0; j + 1 < s.size.y(); ++j)
+      for (int i = 0; i + 1 < s.size.x(); ++i) {
+        const long o = s.index(i, j, k);
+        const auto idx = corner_indices(s, o);
+        bool inside = false;
+        for (long n : idx) inside |= s.phi[n] < 0.0;
+        if (!inside) continue;
+        g.cell_at_origin[o] = int(g.cell_origin.size());
+        g.cell_origin.push_back(o);
+        for (long n : idx) active_node[n] = 1;
+      }
+  g.cell_count = int(g.cell_origin.size());
+  g.grid_kind.assign(s.node_count(), -1);
+  for (long n = 0; n < s.node_count(); ++n)
+    if (active_node[n]) {
+      g.grid_kind[n] = int(g.node_grid.size());
+      g.node_grid.push_back(n);
+    }
+  g.node_count = int(g.node_grid.size());
+  g.node_rest.resize(3 * size_t(g.node_count));
+  for (int a = 0; a < g.node_count; ++a) {
+    const long n = g.node_grid[a];
+    const int i = int(n % s.size.x()), j = int((n / s.size.x()) % s.size.y()), k = int(n / (long(s.size.x()) * s.size.y()));
+    const Eigen::Vector3d x = s.node_position(i, j, k);
+    for (int d = 0; d < 3; ++d) g.node_rest[3 * a + d] = x[d];
+  }
+  g.cell_nodes.resize(8 * size_t(g.cell_count));
+  for (int e = 0; e < g.cell_count; ++e) {
+    const auto idx = corner_indices(s, g.cell_origin[e]);
+    for (int c = 0; c < 8; ++c) g.cell_nodes[8 * e + c] = g.grid_kind[idx[c]];
+  }
+}
+
+void integrate_cells(SimGrid& g, const GridOptions& opt) {
+  g.cell_volume_weights.resize(8 * size_t(g.cell_count));
+  g.cell_surface_weights.resize(8 * size_t(g.cell_count));
+  g.cell_volume.resize(g.cell_count);
+  g.cell_area.resize(g.cell_count);
+#pragma omp parallel for schedule(dynamic, 64)
+  for (int e = 0; e < g.cell_count; ++e) {
+    const auto idx = corner_indices(g.sdf, g.cell_origin[e]);
+    std::array<double, 8> phi;
+    for (int c = 0; c < 8; ++c) phi[c] = g.sdf.phi[idx[c]];
+    const CutCellIntegrals r = integrate_cut_cell(phi, g.h, opt.integration_subdivisions);
+    for (int c = 0; c < 8; ++c) {
+      g.cell_volume_weights[8 * e + c] = r.volume[c];
+      g.cell_surface_weights[8 * e + c] = r.surface[c];
+    }
+    g.cell_volume[e] = r.volume_total;
+    g.cell_area[e] = r.area_total;
+  }
+}
+
+void build_node_cell_incidence(SimGrid& g, const GridOptions& opt) {
+  std::vector<int> count(g.node_count, 0);
+  for (int n : g.cell_nodes) ++count[n];
+  g.node_cell_offset.assign(g.node_count + 1, 0);
+  for (int a = 0; a < g.node_count; ++a) g.node_cell_offset[a + 1] = g.node_cell_offset[a] + count[a];
+  g.node_cell_entry.resize(g.node_cell_offset.back());
+  std::vector<int> fill(g.node_cell_offset.begin(), g.node_cell_offset.end() - 1);
+  for (int e = 0; e < g.cell_count; ++e)
+    for (int c = 0; c < 8; ++c) g.node_cell_entry[fill[g.cell_nodes[8 * e + c]]++] = 8 * e + c;
+
+  const double floor = opt.min_node_volume * g.h * g.h * g.h / 8.0;
+  g.node_volume.assign(g.node_count, 0.0);
+  g.floored_nodes = 0;
+  g.total_volume = 0;
+  Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+  for (int a = 0; a < g.node_count; ++a) {
+    double v = 0;
+    for (int k = g.node_cell_offset[a]; k < g.node_cell_offset[a + 1]; ++k) v += g.cell_volume_weights[g.node_cell_entry[k]];
+    g.total_volume += v;
+    moment += v * Eigen::Vector3d(g.node_rest[3 * a], g.node_rest[3 * a + 1], g.node_rest[3 * a + 2]);
+    if (v < floor) {
+      v = floor;
+      ++g.floored_nodes;
+    }
+    g.node_volume[a] = v;
+  }
+  g.rest_center_of_mass = moment / g.total_volume;
+}
+
+// The 12 edges of a cell as corner pairs.
+constexpr int kCellEdges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
+                                   {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
+
+void build_collision_points(SimGrid& g) {
+  std::map<std::pair<int, int>, int> edge_point;
+  for (int e = 0; e < g.cell_count; ++e) {
+    const auto idx = corner_indices(g.sdf, g.cell_origin[e]);
+    std::vector<int> cell_points;
+    for (const auto& edge : kCellEdges) {
+      const double pa = g.sdf.phi[idx[edge[0]]], pb = g.sdf.phi[idx[edge[1]]];
+      if ((pa < 0) == (pb < 0)) continue;
+      const int na = g.cell_nodes[8 * e + edge[0]], nb = g.cell_nodes[8 * e + edge[1]];
+      const auto key = std::make_pair(na, nb);
+      auto it = edge_point.find(key);
+      if (it == edge_point.end()) {
+        CollisionPoint p;
+        p.node_a = na;
+        p.node_b = nb;
+        p.t = pa / (pa - pb);
+        it = edge_point.emplace(key, int(g.collision_points.size())).first;
+        g.collision_points.push_back(p);
+      }
+      cell_points.push_back(it->second);
+    }
+    for (int p : cell_points) g.collision_points[p].area += g.cell_area[e] / double(cell_points.size());
+  }
+  std::vector<int> count(g.node_count, 0);
+  for (const auto& p : g.collision_points) {
+    ++count[p.node_a];
+    ++count[p.node_b];
+  }
+  g.node_point_offset.assign(g.node_count + 1, 0);
+  for (int a = 0; a < g.node_count; ++a) g.node_point_offset[a + 1] = g.node_point_offset[a] + count[a];
+  g.node_point_entry.resize(g.node_point_offset.back());
+  std::vector<int> fill(g.node_point_offset.begin(), g.node_point_offset.end() - 1);
+  for (int p = 0; p < int(g.collision_points.size()); ++p) {
+    g.node_point_entry[fill[g.collision_points[p].node_a]++] = 2 * p;
+    g.node_point_entry[fill[g.collision_points[p].node_b]++] = 2 * p + 1;
+  }
+}
+
+void build_band(SimGrid& g, int band_width) {
+  const SdfGrid& s = g.sdf;
+  const long total = s.node_count();
+  const int unlimited = band_width <= 0;
+  std::vector<int> dist(total, -1);
+  std::deque<long> queue;
+  for (long n : g.node_grid) {
+    dist[n] = 0;
+    queue.push_back(n);
+  }
+  const int nx = s.size.x(), ny = s.size.y(), nz = s.size.z();
+  auto neighbors = [&](long n, long out[6]) {
+    const int i = int(n % nx), j = int((n / nx) % ny), k = int(n / (long(nx) * ny));
+    out[0] = i > 0 ? n - 1 : -1;
+    out[1] = i + 1 < nx ? n + 1 : -1;
+    out[2] = j > 0 ? n - nx : -1;
+    out[3] = j + 1 < ny ? n + nx : -1;
+    out[4] = k > 0 ? n - long(nx) * ny : -1;
+    out[5] = k + 1 < nz ? n + long(nx) * ny : -1;
+  };
+  while (!queue.empty()) {
+    const long n = queue.front();
+    queue.pop_front();
+    if (!unlimited && dist[n] >= band_width) continue;
+    long nb[6];
+    neighbors(n, nb);
+    for (long m : nb)
+      if (m >= 0 && dist[m] < 0) {
+        dist[m] = dist[n] + 1;
+        queue.push_back(m);
+      }
+  }
+  for (long n = 0; n < total; ++n)
+    if (dist[n] > 0) {
+      g.grid_kind[n] = -2 - int(g.band_grid.size());  // -(band id) - 2
+      g.band_grid.push_back(n);
+    }
+  g.band_count = int(g.band_grid.size());
+  g.band_neighbors.assign(6 * size_t(g.band_count), -1);
+  g.band_degree.assign(g.band_count, 0);
+  for (int b = 0; b < g.band_count; ++b) {
+    long nb[6];
+    neighbors(g.band_grid[b], nb);
+    for (int d = 0; d < 6; ++d) {
+      if (nb[d] < 0) continue;
+      const int kind = g.grid_kind[nb[d]];
+      if (kind >= 0) {
+        g.band_neighbors[6 * b + d] = SimGrid::band_ref_of_active(kind);
+      } else if (kind <= -2) {
+        g.band_neighbors[6 * b + d] = -kind - 2;
+      } else {
+        continue;  // beyond the band: a Neumann boundary, like the grid's edge
+      }
+      ++g.band_degree[b];
+    }
+  }
+}
+
+}  // namespace
+
+SimGrid build_sim_grid(SdfGrid sdf, const GridOptions& options, const std::string& source) {
+  SimGrid g;
+  g.h = sdf.cell_size;
+  g.sdf = std::move(sdf);
+  apply_zero_cutoff(g.sdf, options.zero_cutoff);
+  find_active_cells(g);
+  if (g.cell_count == 0)
+    throw InputError(fmt::format("{}: the object has no grid node with a negative SDF value, so there is "
+                                 "nothing to simulate; check the object's size and grid.cell_size",
+                                 source));
+  integrate_cells(g, options);
+  build_node_cell_incidence(g, options);
+  build_collision_points(g);
+  build_band(g, options.band_width);
+  return g;
+}
+
+int find_cell(const SimGrid& grid, const Eigen::Vector3d& rest_point, Eigen::Vector3d* local) {
+  const SdfGrid& s = grid.sdf;
+  const Eigen::Vector3d q = (rest_point - s.origin) / s.cell_size;
+  Eigen::Vector3i ijk;
+  for (int d = 0; d < 3; ++d) {
+    ijk[d] = int(std::floor(q[d]));
+    if (ijk[d] == s.size[d] - 1) --ijk[d];  // a point on the last node plane
+    if (ijk[d] < 0 || ijk[d] + 1 >= s.size[d]) return -1;
+  }
+  const int cell = grid.cell_at_origin[s.index(ijk.x(), ijk.y(), ijk.z())];
+  if (cell >= 0 && local) *local = q - ijk.cast<double>();
+  return cell;
+}
+
+}  // namespace ssc

@@ -1,0 +1,76 @@
+// The simulation grid built from a rest-pose SDF, following the paper's rules:
+//  - values with |phi| < zero_cutoff * h are set to exactly 0;
+//  - a cell is active iff one of its 8 corner values is < 0; all corners of active cells
+//    are active nodes (they carry displacement unknowns), numbered in scan order;
+//  - band ("extension") nodes are the other grid nodes within an L1 (6-neighbour) graph
+//    distance of band_width from an active node; band_width <= 0 means the whole grid;
+//  - each active cell stores its 8 cut-cell volume weights (integral of N_c over the
+//    body part of the cell) and surface weights;
+//  - collision test points are the crossings of the rest surface with the edges of active
+//    cells, each carrying a share of the cut surface area.
+// Node<->cell and node<->point incidence lists (fixed order) turn every element-to-node
+// sum into a deterministic gather.
+#pragma once
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "models/geometry/sdf_grid.h"
+
+namespace ssc {
+
+struct GridOptions {
+  double zero_cutoff = 0.01;           // in cell sizes
+  int band_width = 0;                  // in grid steps; <= 0: whole grid
+  int integration_subdivisions = 4;    // per axis, for cut cells
+  double min_node_volume = 1e-3;       // floor on a node's volume, in units of h^3/8
+};
+
+struct CollisionPoint {
+  int node_a = 0, node_b = 0;  // active node ids
+  double t = 0;                // position (1 - t) x_a + t x_b
+  double area = 0;             // surface area carried, m^2
+};
+
+struct SimGrid {
+  SdfGrid sdf;  // rest SDF after the zero cutoff
+  double h = 0;
+  int cell_count = 0, node_count = 0, band_count = 0;
+
+  std::vector<long> cell_origin;              // flat SDF index of corner 0, per cell
+  std::vector<int> cell_nodes;                // 8 per cell: active node id of each corner
+  std::vector<double> cell_volume_weights;    // 8 per cell, m^3
+  std::vector<double> cell_surface_weights;   // 8 per cell, m^2
+  std::vector<double> cell_volume;            // per cell, m^3
+  std::vector<double> cell_area;              // per cell, m^2
+  std::vector<int> cell_at_origin;            // per SDF node: id of the cell whose corner 0 it is, or -1
+
+  std::vector<long> node_grid;                // flat SDF index per active node
+  std::vector<double> node_rest;              // 3 per active node, world position
+  std::vector<double> node_volume;            // per active node (floored), m^3
+  int floored_nodes = 0;                      // nodes whose volume was raised to the floor
+  std::vector<int> node_cell_offset;          // CSR over active nodes ...
+  std::vector<int> node_cell_entry;           // ... entries cell * 8 + corner, ascending
+
+  std::vector<CollisionPoint> collision_points;
+  std::vector<int> node_point_offset;         // CSR over active nodes ...
+  std::vector<int> node_point_entry;          // ... entries point * 2 + side (0: a, 1: b)
+
+  std::vector<long> band_grid;                // flat SDF index per band node
+  std::vector<int> band_neighbors;            // 6 per band node: band id >= 0, -(active id) - 2, or -1
+  std::vector<int> band_degree;               // active + band neighbours
+  std::vector<int> grid_kind;                 // per SDF node: active id >= 0, -(band id) - 2, or -1
+
+  double total_volume = 0;                    // m^3 (unfloored)
+  Eigen::Vector3d rest_center_of_mass = Eigen::Vector3d::Zero();
+
+  static int band_ref_of_active(int active) { return -active - 2; }
+};
+
+// Builds the grid; throws InputError (naming `source`) if nothing is inside.
+SimGrid build_sim_grid(SdfGrid sdf, const GridOptions& options, const std::string& source);
+
+// Cell containing a rest-pose point and its local coordinates in [0,1]^3, or -1.
+int find_cell(const SimGrid& grid, const Eigen::Vector3d& rest_point, Eigen::Vector3d* local);
+
+}  // namespace ssc

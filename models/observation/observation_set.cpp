@@ -1,0 +1,478 @@
+// Reading, checking and writing observation folders (see observation_set.h and
+// docs/observation-format.md). The reader is deliberately pedantic: a real recording is
+// converted by hand-written scripts, and every mistake it can make (a key spelled wrong,
+// millimetres instead of metres, a missing frame) should be reported with the file and the
+// fix instead of surfacing later as a bad reconstruction. The writer validates with the
+// same rules, so whatever it writes reads back.
+#include "models/observation/observation_set.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fmt/format.h>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "models/io/errors.h"
+
+namespace ssc {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+namespace {
+
+constexpr const char* kDocs = "see docs/observation-format.md";
+
+// ---- depth_pattern -------------------------------------------------------------------
+
+struct Pattern {
+  std::string prefix, suffix;
+  int width = 0;
+  bool zero_pad = false;
+};
+
+[[noreturn]] void bad_pattern(const std::string& pattern, const std::string& where, const std::string& why) {
+  throw InputError(fmt::format("{}: depth_pattern '{}' {}; use a relative path with exactly one frame "
+                               "number conversion, e.g. \"cam0/depth_%04d.png\"", where, pattern, why));
+}
+
+// Parses the single %[0][width]d conversion at pattern[i] (pattern[i] == '%'); returns the
+// index after it.
+std::size_t parse_conversion(const std::string& p, std::size_t i, Pattern* out, const std::string& where) {
+  std::size_t j = i + 1;
+  if (j < p.size() && p[j] == '0') {
+    out->zero_pad = true;
+    ++j;
+  }
+  int width = 0;
+  while (j < p.size() && p[j] >= '0' && p[j] <= '9') {
+    width = 10 * width + (p[j] - '0');
+    if (width > 9) bad_pattern(p, where, "has a field width above 9");
+    ++j;
+  }
+  if (j >= p.size() || p[j] != 'd') bad_pattern(p, where, "has a % that is not %d, %0Nd or %%");
+  out->width = width;
+  return j + 1;
+}
+
+Pattern parse_pattern(const std::string& p, const std::string& where) {
+  Pattern out;
+  int conversions = 0;
+  for (std::size_t i = 0; i < p.size();) {
+    if (p[i] != '%') {
+      (conversions ? out.suffix : out.prefix) += p[i++];
+    } else if (i + 1 < p.size() && p[i + 1] == '%') {
+      (conversions ? out.suffix : out.prefix) += '%';
+      i += 2;
+    } else {
+      if (++conversions > 1) bad_pattern(p, where, "has more than one conversion");
+      i = parse_conversion(p, i, &out, where);
+    }
+  }
+  if (conversions != 1) bad_pattern(p, where, "has no frame number conversion (%d)");
+  return out;
+}
+
+void check_pattern_path(const std::string& pattern, const std::string& where) {
+  const fs::path path(pattern);
+  if (path.is_absolute()) bad_pattern(pattern, where, "is an absolute path (it must lie inside the folder)");
+  for (const fs::path& part : path)
+    if (part == "..") bad_pattern(pattern, where, "leaves the folder with '..'");
+}
+
+// ---- shared checks -------------------------------------------------------------------
+
+std::string camera_label(const ObservationSet& set, std::size_t i) {
+  return fmt::format("camera {} ('{}')", i, set.cameras[i].name);
+}
+
+// Every depth must be 0 or within the camera's range, widened by `tolerance` (half a PNG
+// unit when reading, because quantisation may move a boundary depth by that much).
+void check_depth_values(const DepthImage& image, const DepthCamera& cam, double tolerance,
+                        const std::string& image_where, const std::string& camera_where) {
+  long bad = 0, first = -1;
+  for (std::size_t k = 0; k < image.depth.size(); ++k) {
+    const double d = image.depth[k];
+    if (d == 0) continue;
+    if (std::isfinite(d) && d >= cam.min_depth - tolerance && d <= cam.max_depth + tolerance) continue;
+    if (bad++ == 0) first = long(k);
+  }
+  if (bad == 0) return;
+  throw InputError(fmt::format(
+      "{}: {} pixel(s) have a depth outside [{}, {}] m, the depth range of camera '{}' (first at u={}, "
+      "v={}: {} m); set such pixels to 0 (no measurement), or fix min_depth/max_depth of {}, or check "
+      "depth_scale (metres per PNG unit)",
+      image_where, bad, cam.min_depth, cam.max_depth, cam.name, first % image.width, first / image.width,
+      image.depth[first], camera_where));
+}
+
+void check_image_size(const DepthImage& image, const DepthCamera& cam, const std::string& image_where,
+                      const std::string& camera_where) {
+  if (image.width == cam.width && image.height == cam.height &&
+      image.depth.size() == std::size_t(image.width) * image.height)
+    return;
+  throw InputError(fmt::format("{}: the depth image is {}x{} but {} ('{}') says {}x{}; make width and "
+                               "height in cameras.json match the depth images",
+                               image_where, image.width, image.height, camera_where, cam.name, cam.width,
+                               cam.height));
+}
+
+void check_scalars(double dt, double depth_scale, double first_frame_time, int frame_count,
+                   std::size_t cameras, const std::string& where) {
+  if (!(dt > 0) || !std::isfinite(dt))
+    throw InputError(fmt::format("{}: dt = {} must be a positive number of seconds between frames", where, dt));
+  if (!(depth_scale > 0) || !std::isfinite(depth_scale))
+    throw InputError(fmt::format("{}: depth_scale = {} must be a positive number of metres per PNG unit "
+                                 "(0.001 for millimetre PNGs)", where, depth_scale));
+  if (!std::isfinite(first_frame_time))
+    throw InputError(fmt::format("{}: first_frame_time must be a finite number of seconds", where));
+  if (frame_count < 1)
+    throw InputError(fmt::format("{}: frame_count = {} must be at least 1", where, frame_count));
+  if (cameras == 0) throw InputError(fmt::format("{}: the set has no cameras; list at least one", where));
+}
+
+// Cameras and patterns; the file names of all frames must be distinct across cameras.
+void check_cameras(const std::vector<DepthCamera>& cameras, const std::vector<std::string>& patterns,
+                   int frame_count, const std::string& where) {
+  if (patterns.size() != cameras.size())
+    throw InputError(fmt::format("{}: {} depth patterns for {} cameras; give one per camera", where,
+                                 patterns.size(), cameras.size()));
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < cameras.size(); ++i) {
+    const std::string cam_where = fmt::format("{}: cameras[{}]", where, i);
+    validate_camera(cameras[i], cam_where);
+    check_pattern_path(patterns[i], cam_where);
+    for (int f = 0; f < frame_count; ++f)
+      if (!names.insert(depth_file_name(patterns[i], f, cam_where)).second)
+        throw InputError(fmt::format("{}: depth_pattern '{}' gives file '{}' (frame {}) that another camera "
+                                     "or frame uses too; give every camera its own pattern",
+                                     cam_where, patterns[i], depth_file_name(patterns[i], f), f));
+  }
+}
+
+void validate_with_patterns(const ObservationSet& set, const std::vector<std::string>& patterns,
+                            const std::string& where) {
+  check_scalars(set.dt, set.depth_scale, set.first_frame_time, set.frame_count, set.cameras.size(), where);
+  check_cameras(set.cameras, patterns, set.frame_count, where);
+  if (set.frames.size() != std::size_t(set.frame_count))
+    throw InputError(fmt::format("{}: frame_count = {} but {} frames are given", where, set.frame_count,
+                                 set.frames.size()));
+  for (int f = 0; f < set.frame_count; ++f) {
+    if (set.frames[f].size() != set.cameras.size())
+      throw InputError(fmt::format("{}: frame {} has {} images for {} cameras", where, f,
+                                   set.frames[f].size(), set.cameras.size()));
+    for (std::size_t i = 0; i < set.cameras.size(); ++i) {
+      const std::string image_where = fmt::format("{}: frame {} of {}", where, f, camera_label(set, i));
+      const std::string cam_where = fmt::format("cameras[{}]", i);
+      check_image_size(set.frames[f][i], set.cameras[i], image_where, cam_where);
+      check_depth_values(set.frames[f][i], set.cameras[i], 0.0, image_where, cam_where);
+    }
+  }
+}
+
+std::vector<std::string> patterns_or_default(const ObservationSet& set) {
+  if (!set.depth_patterns.empty()) return set.depth_patterns;
+  std::vector<std::string> patterns;
+  for (std::size_t i = 0; i < set.cameras.size(); ++i) patterns.push_back(default_depth_pattern(int(i)));
+  return patterns;
+}
+
+// ---- writing -------------------------------------------------------------------------
+
+fs::path normalized_dir(const std::string& dir) {
+  if (dir.empty()) throw InputError("write_observations: empty folder name");
+  fs::path p = fs::path(dir).lexically_normal();
+  if (!p.has_filename()) p = p.parent_path();  // "obs/" -> "obs"
+  if (p.empty() || p.filename() == "." || p.filename() == "..")
+    throw InputError(fmt::format("{}: give the observation folder by name (not '.' or '..')", dir));
+  return p;
+}
+
+fs::path with_suffix(const fs::path& p, const std::string& tag) {
+  fs::path out = p;
+  out += fmt::format(".{}-{}", tag, long(::getpid()));
+  return out;
+}
+
+nlohmann::ordered_json camera_json(const DepthCamera& cam, const std::string& pattern) {
+  nlohmann::ordered_json pose = nlohmann::ordered_json::array();
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) pose.push_back(cam.camera_to_world(r, c));
+  return nlohmann::ordered_json{{"name", cam.name},           {"width", cam.width},
+                                {"height", cam.height},       {"fx", cam.fx},
+                                {"fy", cam.fy},               {"cx", cam.cx},
+                                {"cy", cam.cy},               {"camera_to_world", pose},
+                                {"min_depth", cam.min_depth}, {"max_depth", cam.max_depth},
+                                {"depth_pattern", pattern}};
+}
+
+void write_text_file(const fs::path& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary);
+  out << text;
+  out.close();
+  if (!out) throw InputError(fmt::format("{}: cannot write the file; check that the folder is writable "
+                                         "and the disk not full", path.string()));
+}
+
+void write_header(const fs::path& folder, const ObservationSet& set, const std::vector<std::string>& patterns) {
+  nlohmann::ordered_json j;
+  j["format"] = kObservationFormat;
+  j["dt"] = set.dt;
+  j["depth_scale"] = set.depth_scale;
+  j["frame_count"] = set.frame_count;
+  j["first_frame_time"] = set.first_frame_time;
+  j["cameras"] = nlohmann::ordered_json::array();
+  for (std::size_t i = 0; i < set.cameras.size(); ++i) j["cameras"].push_back(camera_json(set.cameras[i], patterns[i]));
+  write_text_file(folder / "cameras.json", j.dump(2) + "\n");
+}
+
+void write_frames(const fs::path& folder, const ObservationSet& set, const std::vector<std::string>& patterns) {
+  for (int f = 0; f < set.frame_count; ++f)
+    for (std::size_t i = 0; i < set.cameras.size(); ++i) {
+      const fs::path file = folder / depth_file_name(patterns[i], f);
+      std::error_code ec;
+      fs::create_directories(file.parent_path(), ec);
+      if (ec) throw InputError(fmt::format("{}: cannot create folder ({})", file.parent_path().string(), ec.message()));
+      write_depth_png(file.string(), set.frames[f][i], set.depth_scale);
+    }
+}
+
+void make_fresh_dir(const fs::path& p) {
+  std::error_code ec;
+  fs::remove_all(p, ec);
+  if (!ec) fs::create_directories(p, ec);
+  if (ec) throw InputError(fmt::format("{}: cannot create the temporary folder ({}); check that the parent "
+                                       "folder is writable", p.string(), ec.message()));
+}
+
+// An existing target is replaced only if it is an observation folder or empty.
+void check_replaceable(const fs::path& target) {
+  std::error_code ec;
+  if (!fs::exists(target, ec)) return;
+  if (!fs::is_directory(target, ec))
+    throw InputError(fmt::format("{}: exists and is not a folder; choose another output path", target.string()));
+  if (fs::exists(target / "cameras.json", ec) || fs::is_empty(target, ec)) return;
+  throw InputError(fmt::format("{}: exists and is not an observation folder (no cameras.json); refusing to "
+                               "replace it: choose another output path or delete it", target.string()));
+}
+
+void swap_into_place(const fs::path& tmp, const fs::path& target) {
+  std::error_code ec;
+  const fs::path old = with_suffix(target, "old");
+  const bool had_old = fs::exists(target, ec);
+  if (had_old) {
+    fs::remove_all(old, ec);
+    fs::rename(target, old, ec);
+    if (ec) throw InputError(fmt::format("{}: cannot move the existing folder aside ({})", target.string(), ec.message()));
+  }
+  fs::rename(tmp, target, ec);
+  if (ec) {
+    if (had_old) fs::rename(old, target, ec);
+    throw InputError(fmt::format("{}: cannot rename the written folder {} into place", target.string(), tmp.string()));
+  }
+  if (had_old) fs::remove_all(old, ec);
+}
+
+// ---- reading -------------------------------------------------------------------------
+
+std::string qualified(const std::string& ctx, const std::string& key) {
+  return ctx.empty() ? key : ctx + "." + key;
+}
+
+const Json& get_key(const Json& obj, const std::string& key, const std::string& file, const std::string& ctx) {
+  if (!obj.is_object())
+    throw InputError(fmt::format("{}: '{}' must be a JSON object, got {}; {}", file, ctx.empty() ? "top level" : ctx,
+                                 obj.type_name(), kDocs));
+  const auto it = obj.find(key);
+  if (it == obj.end())
+    throw InputError(fmt::format("{}: missing key '{}'; {}", file, qualified(ctx, key), kDocs));
+  return *it;
+}
+
+double as_number(const Json& v, const std::string& file, const std::string& name) {
+  if (!v.is_number())
+    throw InputError(fmt::format("{}: key '{}' must be a number, got {} ({}); {}", file, name, v.type_name(),
+                                 v.dump(), kDocs));
+  const double x = v.get<double>();
+  if (!std::isfinite(x)) throw InputError(fmt::format("{}: key '{}' is not a finite number", file, name));
+  return x;
+}
+
+double get_number(const Json& obj, const std::string& key, const std::string& file, const std::string& ctx) {
+  return as_number(get_key(obj, key, file, ctx), file, qualified(ctx, key));
+}
+
+int get_int(const Json& obj, const std::string& key, const std::string& file, const std::string& ctx) {
+  const double x = get_number(obj, key, file, ctx);
+  if (x != std::floor(x) || std::fabs(x) > std::numeric_limits<int>::max())
+    throw InputError(fmt::format("{}: key '{}' must be an integer, got {}", file, qualified(ctx, key), x));
+  return int(x);
+}
+
+std::string get_string(const Json& obj, const std::string& key, const std::string& file, const std::string& ctx) {
+  const Json& v = get_key(obj, key, file, ctx);
+  if (!v.is_string())
+    throw InputError(fmt::format("{}: key '{}' must be a string, got {} ({}); {}", file, qualified(ctx, key),
+                                 v.type_name(), v.dump(), kDocs));
+  return v.get<std::string>();
+}
+
+Eigen::Matrix4d get_pose(const Json& obj, const std::string& file, const std::string& ctx) {
+  const Json& v = get_key(obj, "camera_to_world", file, ctx);
+  const std::string name = qualified(ctx, "camera_to_world");
+  if (!v.is_array() || v.size() != 16)
+    throw InputError(fmt::format("{}: key '{}' must be an array of 16 numbers (row-major 4x4 camera-to-world "
+                                 "pose), got {}", file, name, v.dump()));
+  Eigen::Matrix4d m;
+  for (int k = 0; k < 16; ++k) m(k / 4, k % 4) = as_number(v[k], file, fmt::format("{}[{}]", name, k));
+  return m;
+}
+
+DepthCamera parse_camera(const Json& j, const std::string& file, const std::string& ctx) {
+  DepthCamera cam;
+  cam.name = get_string(j, "name", file, ctx);
+  cam.width = get_int(j, "width", file, ctx);
+  cam.height = get_int(j, "height", file, ctx);
+  cam.fx = get_number(j, "fx", file, ctx);
+  cam.fy = get_number(j, "fy", file, ctx);
+  cam.cx = get_number(j, "cx", file, ctx);
+  cam.cy = get_number(j, "cy", file, ctx);
+  cam.camera_to_world = get_pose(j, file, ctx);
+  cam.min_depth = get_number(j, "min_depth", file, ctx);
+  cam.max_depth = get_number(j, "max_depth", file, ctx);
+  return cam;
+}
+
+Json parse_json_file(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(fmt::format("{}: cannot open the file", path.string()));
+  std::stringstream text;
+  text << in.rdbuf();
+  try {
+    return Json::parse(text.str());
+  } catch (const Json::parse_error& e) {
+    throw InputError(fmt::format("{}: malformed JSON ({}); fix the syntax", path.string(), e.what()));
+  }
+}
+
+void check_format(const Json& j, const std::string& file) {
+  const std::string format = get_string(j, "format", file, "");
+  if (format != kObservationFormat)
+    throw InputError(fmt::format("{}: unknown format '{}'; this reader understands \"format\": \"{}\"", file,
+                                 format, kObservationFormat));
+}
+
+// Everything of cameras.json; the images are read by read_frames.
+ObservationSet parse_header(const Json& j, const std::string& file) {
+  check_format(j, file);
+  ObservationSet set;
+  set.dt = get_number(j, "dt", file, "");
+  set.depth_scale = get_number(j, "depth_scale", file, "");
+  set.frame_count = get_int(j, "frame_count", file, "");
+  set.first_frame_time = j.contains("first_frame_time") ? get_number(j, "first_frame_time", file, "") : 0.0;
+  const Json& cams = get_key(j, "cameras", file, "");
+  if (!cams.is_array()) throw InputError(fmt::format("{}: key 'cameras' must be an array of cameras", file));
+  for (std::size_t i = 0; i < cams.size(); ++i) {
+    const std::string ctx = fmt::format("cameras[{}]", i);
+    set.cameras.push_back(parse_camera(cams[i], file, ctx));
+    set.depth_patterns.push_back(get_string(cams[i], "depth_pattern", file, ctx));
+  }
+  check_scalars(set.dt, set.depth_scale, set.first_frame_time, set.frame_count, set.cameras.size(), file);
+  check_cameras(set.cameras, set.depth_patterns, set.frame_count, file);
+  return set;
+}
+
+DepthImage read_frame(const ObservationSet& set, const fs::path& folder, int f, std::size_t i,
+                      const std::string& json_file) {
+  const fs::path png = folder / depth_file_name(set.depth_patterns[i], f);
+  std::error_code ec;
+  if (!fs::exists(png, ec))
+    throw InputError(fmt::format("{}: frame {} of {} is missing: {} does not exist ({} says frame_count = {}); "
+                                 "provide the file or lower frame_count",
+                                 folder.string(), f, camera_label(set, i), png.string(), json_file,
+                                 set.frame_count));
+  DepthImage image = read_depth_png(png.string(), set.depth_scale);
+  const std::string cam_where = fmt::format("cameras[{}] of {}", i, json_file);
+  check_image_size(image, set.cameras[i], png.string(), cam_where);
+  check_depth_values(image, set.cameras[i], 0.5000001 * set.depth_scale, png.string(), cam_where);
+  return image;
+}
+
+void read_frames(ObservationSet& set, const fs::path& folder, const std::string& json_file) {
+  set.frames.assign(set.frame_count, {});
+  for (int f = 0; f < set.frame_count; ++f)
+    for (std::size_t i = 0; i < set.cameras.size(); ++i)
+      set.frames[f].push_back(read_frame(set, folder, f, i, json_file));
+}
+
+}  // namespace
+
+std::string default_depth_pattern(int camera) { return fmt::format("cam{}/depth_%04d.png", camera); }
+
+std::string depth_file_name(const std::string& pattern, int frame, const std::string& where) {
+  const Pattern p = parse_pattern(pattern, where);
+  check_pattern_path(pattern, where);
+  if (frame < 0) throw InputError(fmt::format("{}: negative frame number {}", where, frame));
+  const std::string number =
+      p.zero_pad ? fmt::format("{:0{}d}", frame, p.width) : fmt::format("{:>{}d}", frame, p.width);
+  return p.prefix + number + p.suffix;
+}
+
+void validate_observations(const ObservationSet& set, const std::string& where) {
+  validate_with_patterns(set, patterns_or_default(set), where);
+}
+
+void write_observations(const std::string& dir, const ObservationSet& set) {
+  const fs::path target = normalized_dir(dir);
+  const std::vector<std::string> patterns = patterns_or_default(set);
+  validate_with_patterns(set, patterns, fmt::format("write_observations({})", target.string()));
+  check_replaceable(target);
+  const fs::path tmp = with_suffix(target, "tmp");
+  make_fresh_dir(tmp);
+  try {
+    write_header(tmp, set, patterns);
+    write_frames(tmp, set, patterns);
+  } catch (...) {
+    std::error_code ec;
+    fs::remove_all(tmp, ec);
+    throw;
+  }
+  swap_into_place(tmp, target);
+}
+
+ObservationSet read_observations(const std::string& dir) {
+  const fs::path folder(dir);
+  const fs::path json_path = folder / "cameras.json";
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec))
+    throw InputError(fmt::format("{}: observation folder does not exist; give the folder that holds "
+                                 "cameras.json and the depth PNGs", dir));
+  if (!fs::exists(json_path, ec))
+    throw InputError(fmt::format("{}: missing cameras.json; an observation folder needs it ({})",
+                                 json_path.string(), kDocs));
+  const std::string json_file = json_path.string();
+  ObservationSet set = parse_header(parse_json_file(json_path), json_file);
+  read_frames(set, folder, json_file);
+  return set;
+}
+
+std::vector<Eigen::Vector3d> observed_points(const ObservationSet& set, int frame) {
+  if (frame < 0 || frame >= int(set.frames.size()))
+    throw InputError(fmt::format("observed_points: frame {} is outside the observation set (frames 0..{})",
+                                 frame, int(set.frames.size()) - 1));
+  std::vector<Eigen::Vector3d> points;
+  for (std::size_t i = 0; i < set.cameras.size(); ++i) {
+    const DepthImage& image = set.frames[frame][i];
+    for (int v = 0; v < image.height; ++v)
+      for (int u = 0; u < image.width; ++u)
+        if (image.at(u, v) > 0) points.push_back(unproject(set.cameras[i], u, v, image.at(u, v)));
+  }
+  return points;
+}
+
+}  // namespace ssc

@@ -1,0 +1,77 @@
+// A scene: the rest shape, the grid, the material, initial and boundary conditions and
+// the time stepping, in SI units, read strictly from a JSON file (docs/scene-format.md).
+#pragma once
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "models/geometry/primitives.h"
+#include "models/geometry/transform.h"
+#include "models/grid/sim_grid.h"
+
+namespace ssc {
+
+struct ObjectSpec {
+  enum class Kind { Primitive, SdfFile, Mesh } kind = Kind::Primitive;
+  Primitive primitive;  // kind == Primitive
+  std::string path;     // kind == SdfFile or Mesh, resolved against the scene's folder
+  Transform transform;  // position, rotation_deg, scale
+};
+
+struct MaterialSpec {
+  double youngs_modulus = 5000;  // Pa
+  double poisson_ratio = 0.45;
+  double density = 100;          // kg/m^3
+  double mass_damping = 0.1;     // alpha, 1/s
+  double stiffness_damping = 0.01;  // beta, s
+};
+
+struct PlaneSpec {
+  Eigen::Vector3d normal{0, 1, 0};  // unit
+  double height = 0;                // plane: normal . x = height
+  double stiffness = 1e5;           // Pa per metre of penetration
+  double softmin_alpha = 100;       // 1/m
+};
+
+struct DirichletBox {
+  Eigen::Vector3d min, max;  // world, metres
+};
+
+struct TimeSpec {
+  double dt = 0.01;
+  int steps = 40;
+  double theta = 0.6;
+};
+
+struct SolverSpec {
+  double tolerance = 1e-8;
+  int max_iterations = 2000;
+  double extension_tolerance = 1e-10;
+};
+
+struct Scene {
+  std::string file;       // where it was read from
+  std::string directory;  // for relative paths
+  ObjectSpec object;
+  double cell_size = 0;   // metres (from grid.cell_size or grid.resolution)
+  GridOptions grid;
+  MaterialSpec material;
+  Eigen::Vector3d gravity{0, -9.81, 0};
+  Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  // rad/s about the centre of mass
+  std::vector<PlaneSpec> planes;                                // empty: no ground
+  std::vector<DirichletBox> dirichlet;
+  TimeSpec time;
+  SolverSpec solver;
+  nlohmann::json extra;  // sections read by other commands (observation, ...)
+};
+
+// Reads and validates a scene; overrides are "dotted.key=JSON" applied before parsing.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+Scene parse_scene(const nlohmann::json& config, const std::string& file);
+
+// Ground normal from polar angle (from +y) and azimuth (about +y, from +x), degrees.
+Eigen::Vector3d normal_from_angles(double polar_deg, double azimuth_deg);
+
+}  // namespace ssc

@@ -1,0 +1,225 @@
+// Forward simulation driver (see simulation.h).
+#include "models/sim/simulation.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "models/io/errors.h"
+#include "ops/elasticity.h"
+#include "ops/gather.h"
+#include "ops/polar.h"
+
+namespace ssc {
+
+PhysicalParameters PhysicalParameters::from_scene(const Scene& s) {
+  PhysicalParameters p;
+  p.youngs_modulus = s.material.youngs_modulus;
+  p.poisson_ratio = s.material.poisson_ratio;
+  p.density = s.material.density;
+  p.mass_damping = s.material.mass_damping;
+  p.stiffness_damping = s.material.stiffness_damping;
+  p.gravity = s.gravity;
+  p.linear_velocity = s.linear_velocity;
+  p.angular_velocity = s.angular_velocity;
+  p.planes = s.planes;
+  return p;
+}
+
+Simulation::Simulation(const Scene& scene, const SimGrid& grid, int batch, bool extension)
+    : grid_(grid),
+      graph_(build_timestep_graph(int(scene.planes.size()), extension)),
+      params_(batch, PhysicalParameters::from_scene(scene)),
+      dt_(scene.time.dt),
+      theta_(scene.time.theta) {
+  SolverOptions options;
+  options.cg_tolerance = scene.solver.tolerance;
+  options.cg_max_iterations = scene.solver.max_iterations;
+  options.extension_tolerance = scene.solver.extension_tolerance;
+  interpreter_ = std::make_unique<Interpreter<double>>(graph_.graph, grid_, batch, options);
+  fixed_.assign(grid.node_count, 0);
+  for (int i = 0; i < grid.node_count; ++i) {
+    const Eigen::Vector3d x(grid.node_rest[3 * i], grid.node_rest[3 * i + 1], grid.node_rest[3 * i + 2]);
+    for (const DirichletBox& box : scene.dirichlet)
+      if ((x.array() >= box.min.array()).all() && (x.array() <= box.max.array()).all()) fixed_[i] = 1;
+  }
+  reset();
+}
+
+void Simulation::set_parameters(int b, const PhysicalParameters& p) {
+  if (p.planes.size() != params_[b].planes.size())
+    throw std::logic_error("the number of ground planes is part of the graph and cannot change");
+  params_[b] = p;
+  reset();
+}
+
+void Simulation::write_inputs(int b) {
+  TensorStore<double>& st = interpreter_->store();
+  const PhysicalParameters& p = params_[b];
+  st.data(graph_.youngs_modulus, b)[0] = p.youngs_modulus;
+  st.data(graph_.poisson_ratio, b)[0] = p.poisson_ratio;
+  st.data(graph_.density, b)[0] = p.density;
+  st.data(graph_.mass_damping, b)[0] = p.mass_damping;
+  st.data(graph_.stiffness_damping, b)[0] = p.stiffness_damping;
+  for (int k = 0; k < 3; ++k) st.data(graph_.gravity, b)[k] = p.gravity[k];
+  st.data(graph_.dt, b)[0] = dt_;
+  st.data(graph_.theta, b)[0] = theta_;
+  if (graph_.ground_planes >= 0) {
+    double* q = st.data(graph_.ground_planes, b);
+    for (size_t i = 0; i < p.planes.size(); ++i) {
+      const PlaneSpec& pl = p.planes[i];
+      const Eigen::Vector3d n = pl.normal.normalized();
+      const double v[6] = {n.x(), n.y(), n.z(), pl.height, pl.stiffness, pl.softmin_alpha};
+      for (int k = 0; k < 6; ++k) q[6 * i + k] = v[k];
+    }
+  }
+  double* fixed = st.data(graph_.fixed, b);
+  for (int i = 0; i < grid_.node_count; ++i) fixed[i] = fixed_[i];
+}
+
+double Simulation::total_mass() const {
+  double m = 0;
+  for (double v : grid_.node_volume) m += v;
+  return m * params_[0].density;
+}
+
+void Simulation::reset() {
+  TensorStore<double>& st = interpreter_->store();
+  for (int b = 0; b < batch(); ++b) {
+    write_inputs(b);
+    // Centre of mass with the lumped node volumes, so that the spin carries no momentum.
+    Eigen::Vector3d com = Eigen::Vector3d::Zero();
+    double vol = 0;
+    for (int i = 0; i < grid_.node_count; ++i) {
+      com += grid_.node_volume[i] * Eigen::Vector3d(grid_.node_rest[3 * i], grid_.node_rest[3 * i + 1], grid_.node_rest[3 * i + 2]);
+      vol += grid_.node_volume[i];
+    }
+    com /= vol;
+    double* u = st.data(graph_.u_prev, b);
+    double* v = st.data(graph_.v_prev, b);
+    const PhysicalParameters& p = params_[b];
+    for (int i = 0; i < grid_.node_count; ++i) {
+      const Eigen::Vector3d x(grid_.node_rest[3 * i], grid_.node_rest[3 * i + 1], grid_.node_rest[3 * i + 2]);
+      const Eigen::Vector3d vel = fixed_[i] ? Eigen::Vector3d::Zero() : Eigen::Vector3d(p.linear_velocity + p.angular_velocity.cross(x - com));
+      for (int k = 0; k < 3; ++k) {
+        u[3 * i + k] = 0;
+        v[3 * i + k] = vel[k];
+      }
+    }
+    if (graph_.band_guess >= 0) std::fill_n(st.data(graph_.band_guess, b), 3 * grid_.band_count, 0.0);
+    if (graph_.band_u >= 0) std::fill_n(st.data(graph_.band_u, b), 3 * grid_.band_count, 0.0);
+  }
+  steps_ = 0;
+}
+
+void Simulation::check_state(int b) const {
+  const double* u = displacement(b);
+  const double extent = grid_.h * grid_.sdf.size.cast<double>().maxCoeff();
+  double worst = 0;
+  for (int i = 0; i < 3 * grid_.node_count; ++i) {
+    if (!std::isfinite(u[i]))
+      throw SimulationError(fmt::format("step {}: the simulation produced a non-finite displacement (batch item {}); "
+                                        "lower time.dt or the ground stiffness",
+                                        steps_, b));
+    worst = std::max(worst, std::abs(u[i]));
+  }
+  if (worst > 1000 * extent)
+    throw SimulationError(fmt::format("step {}: the simulation exploded (batch item {}): a node moved {:.3g} m, "
+                                      "{:.0f} times the grid's size; lower time.dt or the ground stiffness",
+                                      steps_, b, worst, worst / extent));
+}
+
+void Simulation::step() {
+  TensorStore<double>& st = interpreter_->store();
+  try {
+    interpreter_->run();
+  } catch (const SimulationError& e) {
+    throw SimulationError(fmt::format("step {}: {}", steps_ + 1, e.what()));
+  }
+  ++steps_;
+  for (int b = 0; b < batch(); ++b) {
+    std::copy_n(st.data(graph_.u, b), 3 * grid_.node_count, st.data(graph_.u_prev, b));
+    std::copy_n(st.data(graph_.v, b), 3 * grid_.node_count, st.data(graph_.v_prev, b));
+    if (graph_.band_u >= 0) std::copy_n(st.data(graph_.band_u, b), 3 * grid_.band_count, st.data(graph_.band_guess, b));
+    check_state(b);
+  }
+}
+
+const double* Simulation::displacement(int b) const { return interpreter_->store().data(graph_.u_prev, b); }
+const double* Simulation::velocity(int b) const { return interpreter_->store().data(graph_.v_prev, b); }
+const double* Simulation::band_displacement(int b) const {
+  return graph_.band_u >= 0 ? interpreter_->store().data(graph_.band_guess, b) : nullptr;
+}
+
+Eigen::Vector3d Simulation::center_of_mass(int b) const {
+  const double* u = displacement(b);
+  Eigen::Vector3d s = Eigen::Vector3d::Zero();
+  double m = 0;
+  for (int i = 0; i < grid_.node_count; ++i) {
+    const double w = grid_.node_volume[i];
+    for (int k = 0; k < 3; ++k) s[k] += w * (grid_.node_rest[3 * i + k] + u[3 * i + k]);
+    m += w;
+  }
+  return s / m;
+}
+
+Eigen::Vector3d Simulation::linear_momentum(int b) const {
+  const double* v = velocity(b);
+  Eigen::Vector3d s = Eigen::Vector3d::Zero();
+  for (int i = 0; i < grid_.node_count; ++i)
+    for (int k = 0; k < 3; ++k) s[k] += grid_.node_volume[i] * v[3 * i + k];
+  return s * params_[b].density;
+}
+
+Eigen::Vector3d Simulation::angular_momentum(int b) const {
+  const double *u = displacement(b), *v = velocity(b);
+  Eigen::Vector3d s = Eigen::Vector3d::Zero();
+  for (int i = 0; i < grid_.node_count; ++i) {
+    const Eigen::Vector3d x(grid_.node_rest[3 * i] + u[3 * i], grid_.node_rest[3 * i + 1] + u[3 * i + 1],
+                            grid_.node_rest[3 * i + 2] + u[3 * i + 2]);
+    s += grid_.node_volume[i] * x.cross(Eigen::Vector3d(v[3 * i], v[3 * i + 1], v[3 * i + 2]));
+  }
+  return s * params_[b].density;
+}
+
+double Simulation::kinetic_energy(int b) const {
+  const double* v = velocity(b);
+  double e = 0;
+  for (int i = 0; i < grid_.node_count; ++i)
+    for (int k = 0; k < 3; ++k) e += grid_.node_volume[i] * v[3 * i + k] * v[3 * i + k];
+  return 0.5 * params_[b].density * e;
+}
+
+double Simulation::elastic_energy(int b) const {
+  const double* u = displacement(b);
+  double lambda, mu;
+  ops::lame_from_young(params_[b].youngs_modulus, params_[b].poisson_ratio, lambda, mu);
+  double e = 0;
+  for (int c = 0; c < grid_.cell_count; ++c) {
+    Vec3<double> uc[8];
+    ops::load_cell_corners(u, grid_.cell_nodes.data(), c, uc);
+    Mat3<double> R;
+    ops::polar_rotation(ops::cell_deformation_gradient(uc, grid_.h), R);
+    e += ops::corotated_energy(R, grid_.cell_volume_weights.data() + 8 * c, lambda, mu, grid_.h, uc);
+  }
+  return e;
+}
+
+Eigen::Vector3d Simulation::probe(int b, const Eigen::Vector3d& rest_point) const {
+  Eigen::Vector3d local;
+  const int cell = find_cell(grid_, rest_point, &local);
+  if (cell < 0)
+    throw InputError(fmt::format("probe ({}, {}, {}) is not inside a cell of the body; give a rest-pose point on or in the object",
+                                 rest_point.x(), rest_point.y(), rest_point.z()));
+  const double* u = displacement(b);
+  Eigen::Vector3d d = Eigen::Vector3d::Zero();
+  for (int c = 0; c < 8; ++c) {
+    double w = 1;
+    for (int a = 0; a < 3; ++a) w *= ((c >> a) & 1) ? local[a] : 1 - local[a];
+    const int n = grid_.cell_nodes[8 * cell + c];
+    d += w * Eigen::Vector3d(u[3 * n], u[3 * n + 1], u[3 * n + 2]);
+  }
+  return d;
+}
+
+}  // namespace ssc

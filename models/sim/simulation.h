@@ -1,0 +1,71 @@
+// A batch of forward simulations of one body: the timestep graph run by the CPU
+// interpreter in double, one set of physical parameters per batch item.
+#pragma once
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "models/grid/sim_grid.h"
+#include "models/sim/scene.h"
+#include "models/sim/timestep_graph.h"
+#include "runtime/interpreter.h"
+
+namespace ssc {
+
+// Everything the paper optimises, per simulation.
+struct PhysicalParameters {
+  double youngs_modulus = 0, poisson_ratio = 0, density = 0, mass_damping = 0, stiffness_damping = 0;
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();
+  std::vector<PlaneSpec> planes;
+
+  static PhysicalParameters from_scene(const Scene& scene);
+};
+
+class Simulation {
+ public:
+  Simulation(const Scene& scene, const SimGrid& grid, int batch = 1, bool extension = false);
+
+  int batch() const { return interpreter_->batch(); }
+  void set_parameters(int b, const PhysicalParameters& p);
+  const PhysicalParameters& parameters(int b) const { return params_[b]; }
+  // Rest state with the initial velocity; called by the constructor and set_parameters.
+  void reset();
+  // Advances every batch item by one step; SimulationError names the step on failure.
+  void step();
+  int steps_taken() const { return steps_; }
+  double dt() const { return dt_; }
+
+  const double* displacement(int b) const;
+  const double* velocity(int b) const;
+  const double* band_displacement(int b) const;  // nullptr without extension
+  const std::vector<char>& fixed_nodes() const { return fixed_; }
+
+  Eigen::Vector3d center_of_mass(int b) const;
+  Eigen::Vector3d linear_momentum(int b) const;
+  Eigen::Vector3d angular_momentum(int b) const;  // about the origin
+  double kinetic_energy(int b) const;
+  double elastic_energy(int b) const;
+  double total_mass() const;
+  // Displacement of a rest-pose point (trilinear in its cell); InputError outside the body's cells.
+  Eigen::Vector3d probe(int b, const Eigen::Vector3d& rest_point) const;
+
+  const RunReport& last_report() const { return interpreter_->report(); }
+  const SimGrid& grid() const { return grid_; }
+  const TimestepGraph& timestep_graph() const { return graph_; }
+
+ private:
+  void write_inputs(int b);
+  void check_state(int b) const;
+
+  const SimGrid& grid_;
+  TimestepGraph graph_;
+  std::unique_ptr<Interpreter<double>> interpreter_;
+  std::vector<PhysicalParameters> params_;
+  std::vector<char> fixed_;
+  double dt_, theta_;
+  int steps_ = 0;
+};
+
+}  // namespace ssc

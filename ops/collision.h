@@ -1,0 +1,62 @@
+// Soft-min penalty contact with ground planes, treated implicitly as in the paper.
+//
+// Test points sit where the rest-pose surface crosses a grid edge between active nodes
+// a and b (parameter t), each carrying a share A of the surface area. For a plane with
+// unit normal n and height d (signed distance n.x - d), the penalty force magnitude is
+//   f_cur = -k A softmin(dist),  fdot = -k A softmin'(dist) (n.v),
+//   f     = theta (f_cur + dt fdot) + (1 - theta) f_cur,
+// the first-order Taylor prediction of the next step's force blended with the theta of
+// the time integrator. softmin(x) = -log(1 + exp(-alpha x)) / alpha. The force f n is
+// split onto the two edge nodes with weights (1 - t, t).
+#pragma once
+#include "ops/ssc_math.h"
+
+namespace ssc {
+namespace ops {
+
+constexpr int kMaxGroundPlanes = 8;
+
+template <class Real>
+struct GroundPlane {
+  Vec3<Real> normal;  // unit
+  Real height;        // plane: normal . x = height
+  Real stiffness;     // k, pascal per metre of penetration
+  Real alpha;         // soft-min sharpness, 1/metre
+};
+
+// softmin(x) = -log(1 + exp(-alpha x)) / alpha, evaluated without overflow.
+template <class Real>
+SSC_HD inline Real softmin(Real x, Real alpha) {
+  const Real y = -alpha * x;
+  const Real lp = y > Real(0) ? y + log1p(exp(-y)) : log1p(exp(y));
+  return -lp / alpha;
+}
+
+// d softmin / dx = 1 / (exp(alpha x) + 1).
+template <class Real>
+SSC_HD inline Real softmin_derivative(Real x, Real alpha) {
+  const Real y = alpha * x;
+  if (y > Real(0)) {
+    const Real e = exp(-y);
+    return e / (Real(1) + e);
+  }
+  return Real(1) / (exp(y) + Real(1));
+}
+
+// Force on one test point (position x, velocity v, area share A) from all planes.
+template <class Real>
+SSC_HD inline Vec3<Real> contact_force(Vec3<Real> x, Vec3<Real> v, Real area, const GroundPlane<Real>* planes,
+                                       int plane_count, Real dt, Real theta) {
+  Vec3<Real> f = zero3<Real>();
+  for (int p = 0; p < plane_count; ++p) {
+    const GroundPlane<Real>& g = planes[p];
+    const Real dist = dot(g.normal, x) - g.height;
+    const Real f_cur = -g.stiffness * area * softmin(dist, g.alpha);
+    const Real f_dot = -g.stiffness * area * softmin_derivative(dist, g.alpha) * dot(g.normal, v);
+    f += (f_cur + theta * dt * f_dot) * g.normal;
+  }
+  return f;
+}
+
+}  // namespace ops
+}  // namespace ssc

@@ -1,0 +1,131 @@
+// Corotated linear elasticity on one hexahedral cell with partial-volume nodal
+// quadrature (the paper's discretisation): the cell integral of B^T C B is taken at the
+// 8 corners v with the weights w_v = integral over the cut region of N_v, so a cut cell
+// needs only its 8 volume weights. In the rotated frame of the cell the element maps
+// corner vectors q_c to forces
+//   y_c = sum_v w_v sigma(eps_v) grad N_c(v),  eps_v = sym(sum_c q_c (x) grad N_c(v)),
+//   sigma = lambda tr(eps) I + 2 mu eps,
+// which is applied matrix-free: the stiffness matrix is never assembled.
+#pragma once
+#include "ops/ssc_math.h"
+
+namespace ssc {
+namespace ops {
+
+template <class Real>
+SSC_HD inline void lame_from_young(Real E, Real nu, Real& lambda, Real& mu) {
+  mu = E / (Real(2) * (Real(1) + nu));
+  lambda = E * nu / ((Real(1) + nu) * (Real(1) - Real(2) * nu));
+}
+
+// Gradient of shape function N_c at corner v of a cell of size h.
+template <class Real>
+SSC_HD inline Vec3<Real> shape_gradient_at_corner(int c, int v, Real h) {
+  Vec3<Real> g;
+  for (int a = 0; a < 3; ++a) {
+    Real s = corner_bit(c, a) ? Real(1) : Real(-1);
+    for (int o = 0; o < 3; ++o)
+      if (o != a && corner_bit(c, o) != corner_bit(v, o)) s = Real(0);
+    g[a] = s / h;
+  }
+  return g;
+}
+
+// Local (rest) position of corner c relative to corner 0.
+template <class Real>
+SSC_HD inline Vec3<Real> corner_offset(int c, Real h) {
+  return {h * Real(corner_bit(c, 0)), h * Real(corner_bit(c, 1)), h * Real(corner_bit(c, 2))};
+}
+
+// y = K_e q for the unrotated element (q, y: 8 corner vectors).
+template <class Real>
+SSC_HD inline void element_stiffness_apply(const Real* w, Real lambda, Real mu, Real h,
+                                           const Vec3<Real>* q, Vec3<Real>* y) {
+  for (int c = 0; c < 8; ++c) y[c] = zero3<Real>();
+  for (int v = 0; v < 8; ++v) {
+    if (w[v] == Real(0)) continue;
+    Mat3<Real> G = zero33<Real>();
+    for (int c = 0; c < 8; ++c) {
+      const Vec3<Real> g = shape_gradient_at_corner<Real>(c, v, h);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) G.m[i][j] += q[c][i] * g[j];
+    }
+    const Real tr = trace(G);
+    Mat3<Real> S;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        S.m[i][j] = mu * (G.m[i][j] + G.m[j][i]) + (i == j ? lambda * tr : Real(0));
+    for (int c = 0; c < 8; ++c) y[c] += w[v] * (S * shape_gradient_at_corner<Real>(c, v, h));
+  }
+}
+
+// y_c = R K_e R^T p_c: the corotated element applied to nodal vectors p.
+template <class Real>
+SSC_HD inline void corotated_apply(const Mat3<Real>& R, const Real* w, Real lambda, Real mu, Real h,
+                                   const Vec3<Real>* p, Vec3<Real>* y) {
+  Vec3<Real> q[8], yl[8];
+  for (int c = 0; c < 8; ++c) q[c] = mul_transposed(R, p[c]);
+  element_stiffness_apply(w, lambda, mu, h, q, yl);
+  for (int c = 0; c < 8; ++c) y[c] = R * yl[c];
+}
+
+// Force that keeps a rigidly rotated cell free of stress: f_c = -R K_e (R^T x_c - x_c),
+// with x_c the local corner positions (K_e annihilates translations).
+template <class Real>
+SSC_HD inline void corotation_offset_force(const Mat3<Real>& R, const Real* w, Real lambda, Real mu,
+                                           Real h, Vec3<Real>* f) {
+  Vec3<Real> q[8], yl[8];
+  for (int c = 0; c < 8; ++c) {
+    const Vec3<Real> x = corner_offset<Real>(c, h);
+    q[c] = mul_transposed(R, x) - x;
+  }
+  element_stiffness_apply(w, lambda, mu, h, q, yl);
+  for (int c = 0; c < 8; ++c) f[c] = -(R * yl[c]);
+}
+
+// Diagonal entries of the 3x3 diagonal blocks of R K_e R^T (for Jacobi preconditioning).
+template <class Real>
+SSC_HD inline void corotated_diagonal(const Mat3<Real>& R, const Real* w, Real lambda, Real mu, Real h,
+                                      Vec3<Real>* d) {
+  for (int c = 0; c < 8; ++c) {
+    Mat3<Real> K = zero33<Real>();
+    for (int v = 0; v < 8; ++v) {
+      const Vec3<Real> a = shape_gradient_at_corner<Real>(c, v, h);
+      const Real aa = dot(a, a);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          K.m[i][j] += w[v] * ((lambda + mu) * a[i] * a[j] + (i == j ? mu * aa : Real(0)));
+    }
+    const Mat3<Real> Kr = R * K * transpose(R);
+    d[c] = make_vec3(Kr.m[0][0], Kr.m[1][1], Kr.m[2][2]);
+  }
+}
+
+// Elastic energy 1/2 q^T K_e q with q_c = R^T (x_c + u_c) - x_c.
+template <class Real>
+SSC_HD inline Real corotated_energy(const Mat3<Real>& R, const Real* w, Real lambda, Real mu, Real h,
+                                    const Vec3<Real>* u) {
+  Vec3<Real> q[8], y[8];
+  for (int c = 0; c < 8; ++c) {
+    const Vec3<Real> x = corner_offset<Real>(c, h);
+    q[c] = mul_transposed(R, x + u[c]) - x;
+  }
+  element_stiffness_apply(w, lambda, mu, h, q, y);
+  Real e = Real(0);
+  for (int c = 0; c < 8; ++c) e += dot(q[c], y[c]);
+  return Real(0.5) * e;
+}
+
+// Cell-average deformation gradient F = I + 1/(4h) sum_c u_c s_c^T, s_c = 2 b_c - 1.
+template <class Real>
+SSC_HD inline Mat3<Real> cell_deformation_gradient(const Vec3<Real>* u, Real h) {
+  Mat3<Real> F = identity3<Real>();
+  const Real s = Real(1) / (Real(4) * h);
+  for (int c = 0; c < 8; ++c)
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) F.m[i][j] += s * u[c][i] * (corner_bit(c, j) ? Real(1) : Real(-1));
+  return F;
+}
+
+}  // namespace ops
+}  // namespace ssc

@@ -1,0 +1,39 @@
+// Deterministic element-to-node transfers. Per-cell ops write one value per cell corner
+// (8 x 3 Reals per cell); nodes then sum the corners that touch them through a fixed,
+// ascending incidence list. No atomics, so the sum order (and the result) never changes.
+#pragma once
+#include "ops/ssc_math.h"
+
+namespace ssc {
+namespace ops {
+
+// Sum of per-corner vectors over the (cell, corner) entries of one node.
+template <class Real>
+SSC_HD inline Vec3<Real> gather_corner_sum(const Real* corner_values, const int* offset, const int* entry, int node) {
+  Vec3<Real> s = zero3<Real>();
+  for (int k = offset[node]; k < offset[node + 1]; ++k) s += load3(corner_values, entry[k]);
+  return s;
+}
+
+// Sum of per-point vectors split to edge nodes: entry = point * 2 + side, side 0 takes
+// (1 - t), side 1 takes t.
+template <class Real>
+SSC_HD inline Vec3<Real> gather_point_sum(const Real* point_values, const Real* point_t, const int* offset,
+                                          const int* entry, int node) {
+  Vec3<Real> s = zero3<Real>();
+  for (int k = offset[node]; k < offset[node + 1]; ++k) {
+    const int p = entry[k] >> 1;
+    const Real w = (entry[k] & 1) ? point_t[p] : Real(1) - point_t[p];
+    s += w * load3(point_values, p);
+  }
+  return s;
+}
+
+// The 8 corner vectors of one cell from a nodal field.
+template <class Real>
+SSC_HD inline void load_cell_corners(const Real* nodal, const int* cell_nodes, int cell, Vec3<Real>* out) {
+  for (int c = 0; c < 8; ++c) out[c] = load3(nodal, cell_nodes[8 * cell + c]);
+}
+
+}  // namespace ops
+}  // namespace ssc

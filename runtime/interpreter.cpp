@@ -1,0 +1,307 @@
+// Executors of the CPU interpreter: one function per op kind binds the op's tensors and
+// loops the op body of ops/ over its domain (see interpreter.h).
+#include "runtime/interpreter.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "models/io/errors.h"
+#include "ops/collision.h"
+#include "ops/elasticity.h"
+#include "ops/gather.h"
+#include "ops/newmark.h"
+#include "ops/polar.h"
+#include "runtime/pcg.h"
+
+namespace ssc {
+
+DomainSizes domain_sizes(const SimGrid& grid) {
+  DomainSizes s;
+  s.cell = grid.cell_count;
+  s.node = grid.node_count;
+  s.point = int(grid.collision_points.size());
+  s.band = grid.band_count;
+  return s;
+}
+
+template <class Real>
+static std::vector<Real> real_copy(const std::vector<double>& v) {
+  return std::vector<Real>(v.begin(), v.end());
+}
+
+template <class Real>
+Interpreter<Real>::Interpreter(const Graph& graph, const SimGrid& grid, int batch, const SolverOptions& options)
+    : graph_(graph), grid_(grid), options_(options), store_(graph, domain_sizes(grid), batch) {
+  graph_.validate();
+  for (const CollisionPoint& p : grid.collision_points) point_t_.push_back(Real(p.t));
+  weights_ = real_copy<Real>(grid.cell_volume_weights);
+  node_rest_ = real_copy<Real>(grid.node_rest);
+}
+
+template <class Real>
+void Interpreter<Real>::run() {
+  const int B = batch();
+  report_.cg_iterations.assign(B, 0);
+  report_.cg_residual.assign(B, 0.0);
+  report_.extension_iterations.assign(B, 0);
+  report_.degenerate_cells.assign(B, 0);
+  for (const OpNode& op : graph_.ops()) execute(op);
+}
+
+namespace {
+
+template <class Real>
+struct Binder {
+  TensorStore<Real>& store;
+  const OpNode& op;
+  int b;
+  const Real* in(const char* slot) const { return store.data(op.input(slot), b); }
+  Real* out(const char* slot) const { return store.data(op.output(slot), b); }
+  Real scalar(const char* slot, int k = 0) const { return in(slot)[k]; }
+  bool has_input(const char* slot) const {
+    for (const OpArg& a : op.inputs)
+      if (a.slot == slot) return true;
+    return false;
+  }
+};
+
+template <class Real>
+Mat3<Real> load_rotation(const Real* r, int cell) {
+  Mat3<Real> R;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) R.m[i][j] = r[9 * cell + 3 * i + j];
+  return R;
+}
+
+// Per-corner K p for every cell (the matrix-free stiffness product).
+template <class Real>
+void stiffness_apply_cells(const SimGrid& g, const Real* rotation, const Real* weights, Real lambda, Real mu,
+                           const Real* p, Real* corner_out) {
+  const Real h = Real(g.h);
+#pragma omp parallel for schedule(static)
+  for (int e = 0; e < g.cell_count; ++e) {
+    Vec3<Real> pc[8], y[8];
+    ops::load_cell_corners(p, g.cell_nodes.data(), e, pc);
+    ops::corotated_apply(load_rotation(rotation, e), weights + 8 * e, lambda, mu, h, pc, y);
+    for (int c = 0; c < 8; ++c) store3(corner_out, 8 * e + c, y[c]);
+  }
+}
+
+}  // namespace
+
+template <class Real>
+void Interpreter<Real>::execute(const OpNode& op) {
+  const SimGrid& g = grid_;
+  const Real h = Real(g.h);
+  const std::vector<Real>& weights = weights_;
+
+  for (int b = 0; b < batch(); ++b) {
+    Binder<Real> a{store_, op, b};
+    switch (op.kind) {
+      case OpKind::Lame: {
+        Real lambda, mu;
+        ops::lame_from_young(a.scalar("youngs_modulus"), a.scalar("poisson_ratio"), lambda, mu);
+        a.out("lambda")[0] = lambda;
+        a.out("mu")[0] = mu;
+        break;
+      }
+      case OpKind::NodeMass: {
+        const Real rho = a.scalar("density");
+        Real* m = a.out("mass");
+        for (int i = 0; i < g.node_count; ++i) m[i] = rho * Real(g.node_volume[i]);
+        break;
+      }
+      case OpKind::Corotation: {
+        const Real* u = a.in("u_prev");
+        Real* rot = a.out("rotation");
+        Real* status = a.out("polar_status");
+        int degenerate = 0;
+#pragma omp parallel for schedule(static) reduction(+ : degenerate)
+        for (int e = 0; e < g.cell_count; ++e) {
+          Vec3<Real> uc[8];
+          ops::load_cell_corners(u, g.cell_nodes.data(), e, uc);
+          Mat3<Real> R;
+          const int s = ops::polar_rotation(ops::cell_deformation_gradient(uc, h), R);
+          for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) rot[9 * e + 3 * i + j] = R.m[i][j];
+          status[e] = Real(s);
+          degenerate += s == ops::kPolarDegenerate;
+        }
+        report_.degenerate_cells[b] = degenerate;
+        break;
+      }
+      case OpKind::CorotationForce: {
+        const Real* rot = a.in("rotation");
+        const Real lambda = a.scalar("lambda"), mu = a.scalar("mu");
+        Real* f = a.out("corner_force");
+#pragma omp parallel for schedule(static)
+        for (int e = 0; e < g.cell_count; ++e) {
+          Vec3<Real> fc[8];
+          ops::corotation_offset_force(load_rotation(rot, e), weights.data() + 8 * e, lambda, mu, h, fc);
+          for (int c = 0; c < 8; ++c) store3(f, 8 * e + c, fc[c]);
+        }
+        break;
+      }
+      case OpKind::ContactForce: {
+        const Real* u = a.in("u_prev");
+        const Real* v = a.in("v_prev");
+        const Real* planes_in = a.in("ground_planes");
+        const int plane_count = int(store_.stride(op.input("ground_planes")) / 6);
+        ops::GroundPlane<Real> planes[ops::kMaxGroundPlanes];
+        for (int p = 0; p < plane_count; ++p) {
+          const Real* q = planes_in + 6 * p;
+          planes[p] = {make_vec3(q[0], q[1], q[2]), q[3], q[4], q[5]};
+        }
+        const Real dt = a.scalar("dt"), theta = a.scalar("theta");
+        Real* f = a.out("point_force");
+        const int n = int(g.collision_points.size());
+#pragma omp parallel for schedule(static)
+        for (int p = 0; p < n; ++p) {
+          const CollisionPoint& cp = g.collision_points[p];
+          const Real t = point_t_[p];
+          const Vec3<Real> xa = load3(node_rest_.data(), cp.node_a), xb = load3(node_rest_.data(), cp.node_b);
+          const Vec3<Real> x = (Real(1) - t) * (xa + load3(u, cp.node_a)) + t * (xb + load3(u, cp.node_b));
+          const Vec3<Real> vel = (Real(1) - t) * load3(v, cp.node_a) + t * load3(v, cp.node_b);
+          store3(f, p, ops::contact_force(x, vel, Real(cp.area), planes, plane_count, dt, theta));
+        }
+        break;
+      }
+      case OpKind::NodeForce: {
+        const Real* corner = a.in("corner_force");
+        const Real* point = a.has_input("point_force") ? a.in("point_force") : nullptr;
+        const Real* m = a.in("mass");
+        const Vec3<Real> grav = load3(a.in("gravity"), 0);
+        Real* f = a.out("force");
+#pragma omp parallel for schedule(static)
+        for (int i = 0; i < g.node_count; ++i) {
+          Vec3<Real> s = m[i] * grav + ops::gather_corner_sum(corner, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+          if (point)
+            s += ops::gather_point_sum(point, point_t_.data(), g.node_point_offset.data(), g.node_point_entry.data(), i);
+          store3(f, i, s);
+        }
+        break;
+      }
+      case OpKind::StiffnessApply:
+        stiffness_apply_cells(g, a.in("rotation"), weights.data(), a.scalar("lambda"), a.scalar("mu"), a.in("u_prev"),
+                              a.out("ku_corner"));
+        break;
+      case OpKind::NewmarkRhs: {
+        const auto c = ops::newmark_coefficients(a.scalar("dt"), a.scalar("theta"), a.scalar("mass_damping"),
+                                                 a.scalar("stiffness_damping"));
+        const Real* ku = a.in("ku_corner");
+        const Real *m = a.in("mass"), *u = a.in("u_prev"), *v = a.in("v_prev"), *f = a.in("force");
+        Real* rhs = a.out("rhs");
+#pragma omp parallel for schedule(static)
+        for (int i = 0; i < g.node_count; ++i) {
+          const Vec3<Real> kui = ops::gather_corner_sum(ku, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+          store3(rhs, i, ops::newmark_rhs(c, m[i], load3(u, i), load3(v, i), kui, load3(f, i)));
+        }
+        break;
+      }
+      case OpKind::NewmarkSolve: {
+        const auto c = ops::newmark_coefficients(a.scalar("dt"), a.scalar("theta"), a.scalar("mass_damping"),
+                                                 a.scalar("stiffness_damping"));
+        const Real* rot = a.in("rotation");
+        const Real lambda = a.scalar("lambda"), mu = a.scalar("mu");
+        const Real *m = a.in("mass"), *rhs = a.in("rhs"), *u_prev = a.in("u_prev"), *v_prev = a.in("v_prev");
+        const Real* fixed = a.in("fixed");
+        Real* u = a.out("u");
+        const long n = 3L * g.node_count;
+        // Jacobi preconditioner from the exact diagonal of A.
+        std::vector<Real> corner_diag(24 * size_t(g.cell_count)), inv_diag(n), b_free(n), corner(24 * size_t(g.cell_count));
+#pragma omp parallel for schedule(static)
+        for (int e = 0; e < g.cell_count; ++e) {
+          Vec3<Real> d[8];
+          ops::corotated_diagonal(load_rotation(rot, e), weights.data() + 8 * e, lambda, mu, h, d);
+          for (int k = 0; k < 8; ++k) store3(corner_diag.data(), 8 * e + k, d[k]);
+        }
+#pragma omp parallel for schedule(static)
+        for (int i = 0; i < g.node_count; ++i) {
+          const Vec3<Real> kd = ops::gather_corner_sum(corner_diag.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+          const Vec3<Real> d = ops::newmark_system_apply(c, m[i], make_vec3(Real(1), Real(1), Real(1)), kd);
+          const bool fix = fixed[i] != Real(0);
+          for (int k = 0; k < 3; ++k) {
+            inv_diag[3 * i + k] = fix ? Real(1) : Real(1) / d[k];
+            b_free[3 * i + k] = fix ? Real(0) : rhs[3 * i + k];
+            // initial guess u- + dt v-
+            u[3 * i + k] = fix ? Real(0) : u_prev[3 * i + k] + c.dt * v_prev[3 * i + k];
+          }
+        }
+        auto apply = [&](const Real* p, Real* q) {
+          stiffness_apply_cells(g, rot, weights.data(), lambda, mu, p, corner.data());
+#pragma omp parallel for schedule(static)
+          for (int i = 0; i < g.node_count; ++i) {
+            const Vec3<Real> kp = ops::gather_corner_sum(corner.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+            // Fixed nodes: identity rows and columns (their p and u are kept at 0).
+            const bool fix = fixed[i] != Real(0);
+            store3(q, i, fix ? load3(p, i) : ops::newmark_system_apply(c, m[i], load3(p, i), kp));
+          }
+        };
+        // Zero the fixed entries of every search direction by projecting p in apply:
+        // with b and x0 zero there, CG keeps them zero.
+        const PcgResult r = jacobi_pcg<Real>(n, apply, inv_diag.data(), b_free.data(), u, options_.cg_tolerance,
+                                             options_.cg_max_iterations);
+        report_.cg_iterations[b] = r.iterations;
+        report_.cg_residual[b] = r.relative_residual;
+        a.out("cg_iterations")[0] = Real(r.iterations);
+        if (!r.converged)
+          throw SimulationError(fmt::format(
+              "the time-step solve did not converge (batch item {}): relative residual {:.3g} after {} CG "
+              "iterations (tolerance {:.3g}); the simulation is probably unstable: lower time.dt, or raise "
+              "solver.max_iterations",
+              b, r.relative_residual, r.iterations, options_.cg_tolerance));
+        break;
+      }
+      case OpKind::VelocityUpdate: {
+        const auto c = ops::newmark_coefficients(a.scalar("dt"), a.scalar("theta"), Real(0), Real(0));
+        const Real *u = a.in("u"), *u_prev = a.in("u_prev"), *v_prev = a.in("v_prev");
+        Real* v = a.out("v");
+        for (int i = 0; i < g.node_count; ++i)
+          store3(v, i, ops::newmark_velocity(c, load3(u, i), load3(u_prev, i), load3(v_prev, i)));
+        break;
+      }
+      case OpKind::ExtensionSolve: {
+        const Real* u = a.in("u");
+        const Real* guess = a.in("band_guess");
+        Real* x = a.out("band_u");
+        const long n = 3L * g.band_count;
+        std::vector<Real> rhs(n), inv_diag(n);
+        for (int i = 0; i < g.band_count; ++i) {
+          Vec3<Real> s = zero3<Real>();
+          for (int d = 0; d < 6; ++d) {
+            const int nb = g.band_neighbors[6 * i + d];
+            if (nb <= -2) s += load3(u, -nb - 2);
+          }
+          store3(rhs.data(), i, s);
+          for (int k = 0; k < 3; ++k) inv_diag[3 * i + k] = Real(1) / Real(g.band_degree[i]);
+          for (int k = 0; k < 3; ++k) x[3 * i + k] = guess[3 * i + k];
+        }
+        auto apply = [&](const Real* p, Real* q) {
+#pragma omp parallel for schedule(static)
+          for (int i = 0; i < g.band_count; ++i) {
+            Vec3<Real> s = Real(g.band_degree[i]) * load3(p, i);
+            for (int d = 0; d < 6; ++d) {
+              const int nb = g.band_neighbors[6 * i + d];
+              if (nb >= 0) s -= load3(p, nb);
+            }
+            store3(q, i, s);
+          }
+        };
+        const PcgResult r = jacobi_pcg<Real>(n, apply, inv_diag.data(), rhs.data(), x, options_.extension_tolerance,
+                                             options_.extension_max_iterations);
+        report_.extension_iterations[b] = r.iterations;
+        if (!r.converged)
+          throw SimulationError(fmt::format("the displacement extension did not converge (batch item {}): relative "
+                                            "residual {:.3g} after {} iterations",
+                                            b, r.relative_residual, r.iterations));
+        break;
+      }
+    }
+  }
+}
+
+template class Interpreter<double>;
+template class Interpreter<float>;
+
+}  // namespace ssc

@@ -1,0 +1,64 @@
+// The CPU interpreter: runs a graph's ops in order, each op body (ops/) looped over its
+// domain for every batch item, in double (the reference) or float. Loops over a domain
+// are split across threads with OpenMP; every index writes only its own outputs, and
+// all sums are gathers or fixed-order reductions, so results are bitwise reproducible.
+#pragma once
+#include <vector>
+
+#include "graph/graph.h"
+#include "models/grid/sim_grid.h"
+#include "runtime/tensor_store.h"
+
+namespace ssc {
+
+struct SolverOptions {
+  double cg_tolerance = 1e-8;        // relative residual of the time-step solve
+  int cg_max_iterations = 2000;
+  double extension_tolerance = 1e-10;
+  int extension_max_iterations = 5000;
+};
+
+// What the last run() reported, per batch item.
+struct RunReport {
+  std::vector<int> cg_iterations;
+  std::vector<double> cg_residual;
+  std::vector<int> extension_iterations;
+  std::vector<int> degenerate_cells;  // cells whose rotation fell back to identity
+};
+
+DomainSizes domain_sizes(const SimGrid& grid);
+
+template <class Real>
+class Interpreter {
+ public:
+  Interpreter(const Graph& graph, const SimGrid& grid, int batch, const SolverOptions& options);
+
+  TensorStore<Real>& store() { return store_; }
+  const TensorStore<Real>& store() const { return store_; }
+  const Graph& graph() const { return graph_; }
+  const SimGrid& grid() const { return grid_; }
+  int batch() const { return store_.batch(); }
+  const SolverOptions& options() const { return options_; }
+
+  // Executes every op once. Throws SimulationError if a solve does not converge or
+  // produces a non-finite value (naming the op and batch item).
+  void run();
+  const RunReport& report() const { return report_; }
+
+ private:
+  void execute(const OpNode& op);
+
+  const Graph& graph_;
+  const SimGrid& grid_;
+  SolverOptions options_;
+  TensorStore<Real> store_;
+  RunReport report_;
+  std::vector<Real> point_t_;  // collision point edge parameters, in Real
+  std::vector<Real> weights_;    // cut-cell volume weights, in Real
+  std::vector<Real> node_rest_;  // rest positions of the active nodes, in Real
+};
+
+extern template class Interpreter<double>;
+extern template class Interpreter<float>;
+
+}  // namespace ssc

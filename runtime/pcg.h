@@ -1,0 +1,82 @@
+// Jacobi-preconditioned conjugate gradients with deterministic reductions.
+//
+// Dot products are summed in fixed blocks (parallel over blocks, blocks added in order,
+// in double), so the result does not depend on the number of threads. Stops when
+// ||r|| <= tolerance * ||b||; the caller decides what non-convergence means.
+#pragma once
+#include <cmath>
+#include <vector>
+
+namespace ssc {
+
+struct PcgResult {
+  int iterations = 0;
+  double relative_residual = 0;
+  bool converged = false;
+};
+
+template <class Real>
+double deterministic_dot(const Real* a, const Real* b, long n) {
+  constexpr long kBlock = 2048;
+  const long blocks = (n + kBlock - 1) / kBlock;
+  std::vector<double> partial(blocks, 0.0);
+#pragma omp parallel for schedule(static) if (blocks > 4)
+  for (long k = 0; k < blocks; ++k) {
+    double s = 0;
+    const long end = std::min(n, (k + 1) * kBlock);
+    for (long i = k * kBlock; i < end; ++i) s += double(a[i]) * double(b[i]);
+    partial[k] = s;
+  }
+  double s = 0;
+  for (double p : partial) s += p;
+  return s;
+}
+
+// apply(p, Ap) computes the (SPD) operator; inv_diag is the Jacobi preconditioner.
+template <class Real, class Apply>
+PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b, Real* x, double tolerance,
+                     int max_iterations) {
+  std::vector<Real> r(n), z(n), p(n), q(n);
+  PcgResult result;
+  const double b_norm = std::sqrt(deterministic_dot(b, b, n));
+  if (b_norm == 0.0) {
+    for (long i = 0; i < n; ++i) x[i] = Real(0);
+    result.converged = true;
+    return result;
+  }
+  apply(x, q.data());
+#pragma omp parallel for schedule(static)
+  for (long i = 0; i < n; ++i) {
+    r[i] = b[i] - q[i];
+    z[i] = inv_diag[i] * r[i];
+    p[i] = z[i];
+  }
+  double rz = deterministic_dot(r.data(), z.data(), n);
+  double r_norm = std::sqrt(deterministic_dot(r.data(), r.data(), n));
+  while (true) {
+    result.relative_residual = r_norm / b_norm;
+    if (result.relative_residual <= tolerance) {
+      result.converged = true;
+      return result;
+    }
+    if (result.iterations >= max_iterations || !std::isfinite(r_norm)) return result;
+    apply(p.data(), q.data());
+    const double pq = deterministic_dot(p.data(), q.data(), n);
+    const Real step = Real(rz / pq);
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < n; ++i) {
+      x[i] += step * p[i];
+      r[i] -= step * q[i];
+      z[i] = inv_diag[i] * r[i];
+    }
+    const double rz_next = deterministic_dot(r.data(), z.data(), n);
+    const Real beta = Real(rz_next / rz);
+    rz = rz_next;
+#pragma omp parallel for schedule(static)
+    for (long i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
+    r_norm = std::sqrt(deterministic_dot(r.data(), r.data(), n));
+    ++result.iterations;
+  }
+}
+
+}  // namespace ssc

@@ -1,0 +1,13 @@
+// The ssc subcommands. Each registers its options on the CLI11 app and returns the
+// function that runs it.
+#pragma once
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace ssc {
+
+using Command = std::function<int()>;
+
+Command register_simulate(CLI::App& app);
+
+}  // namespace ssc
