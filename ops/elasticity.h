@@ -37,25 +37,33 @@ SSC_HD inline Vec3<Real> corner_offset(int c, Real h) {
   return {h * Real(corner_bit(c, 0)), h * Real(corner_bit(c, 1)), h * Real(corner_bit(c, 2))};
 }
 
-// y = K_e q for the unrotated element (q, y: 8 corner vectors).
+// y = K_e q for the unrotated element (q, y: 8 corner vectors). At corner v only N_v and
+// its three edge neighbours n_a = v ^ (1 << a) have a non-zero gradient there:
+// grad N_v(v) = s_v / h and grad N_{n_a}(v) = -s_v[a] e_a / h, with s_v = 2 b_v - 1.
 template <class Real>
 SSC_HD inline void element_stiffness_apply(const Real* w, Real lambda, Real mu, Real h,
                                            const Vec3<Real>* q, Vec3<Real>* y) {
   for (int c = 0; c < 8; ++c) y[c] = zero3<Real>();
+  const Real inv_h = Real(1) / h;
   for (int v = 0; v < 8; ++v) {
     if (w[v] == Real(0)) continue;
-    Mat3<Real> G = zero33<Real>();
-    for (int c = 0; c < 8; ++c) {
-      const Vec3<Real> g = shape_gradient_at_corner<Real>(c, v, h);
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) G.m[i][j] += q[c][i] * g[j];
+    Real s[3];
+    for (int a = 0; a < 3; ++a) s[a] = corner_bit(v, a) ? inv_h : -inv_h;
+    Mat3<Real> G;  // displacement gradient at corner v, column a = s_a (q_v - q_{n_a})
+    for (int a = 0; a < 3; ++a) {
+      const Vec3<Real> d = q[v] - q[v ^ (1 << a)];
+      for (int i = 0; i < 3; ++i) G.m[i][a] = s[a] * d[i];
     }
     const Real tr = trace(G);
-    Mat3<Real> S;
+    Mat3<Real> S;  // w_v * stress
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
-        S.m[i][j] = mu * (G.m[i][j] + G.m[j][i]) + (i == j ? lambda * tr : Real(0));
-    for (int c = 0; c < 8; ++c) y[c] += w[v] * (S * shape_gradient_at_corner<Real>(c, v, h));
+        S.m[i][j] = w[v] * (mu * (G.m[i][j] + G.m[j][i]) + (i == j ? lambda * tr : Real(0)));
+    for (int a = 0; a < 3; ++a) {
+      const Vec3<Real> col = make_vec3(S.m[0][a], S.m[1][a], S.m[2][a]);
+      y[v] += s[a] * col;
+      y[v ^ (1 << a)] -= s[a] * col;
+    }
   }
 }
 

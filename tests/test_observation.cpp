@@ -412,9 +412,9 @@ ObservationSet small_set() {
   set.depth_scale = 0.0005;
   set.first_frame_time = 0.1;
   set.frame_count = 3;
-  set.cameras = {make_look_at_camera("front", 24, 18, 60, Vector3d(0, 0.5, 2.5), Vector3d(0, 0.4, 0),
+  set.cameras = {make_look_at_camera("front", 48, 36, 40, Vector3d(0, 0.5, 2.5), Vector3d(0, 0.4, 0),
                                      Vector3d(0, 1, 0)),
-                 make_look_at_camera("side", 20, 16, 55, Vector3d(2.0, 1.0, 0.3), Vector3d(0, 0.3, 0),
+                 make_look_at_camera("side", 40, 32, 40, Vector3d(2.0, 1.0, 0.3), Vector3d(0, 0.3, 0),
                                      Vector3d(0, 1, 0))};
   set.cameras[1].min_depth = 0.2;
   set.cameras[1].max_depth = 4.0;
@@ -448,7 +448,7 @@ TEST(ObservationTest, WriteThenReadIsBitwiseIdentical) {
   const ObservationSet set = small_set();
   long measured = 0;
   for (double d : set.frames[0][0].depth) measured += d > 0;
-  ASSERT_GT(measured, 50);  // the ball is in view
+  ASSERT_GT(measured, 150);  // the ball is in view
   write_observations(dir, set);
   const ObservationSet back = read_observations(dir);
   EXPECT_EQ(back.dt, set.dt);
@@ -558,7 +558,7 @@ TEST(ObservationTest, ReaderReportsEveryProblemWithItsPath) {
   }, {"<dir>/cameras.json", "missing key 'depth_scale'"});
   expect_read_error("wrong_type", [](const std::string& d) {
     auto j = read_json(d + "/cameras.json");
-    j["cameras"][0]["width"] = "24";
+    j["cameras"][0]["width"] = "48";
     write_json(d + "/cameras.json", j);
   }, {"<dir>/cameras.json", "cameras[0].width", "must be a number"});
   expect_read_error("bad_pose", [](const std::string& d) {
@@ -577,8 +577,8 @@ TEST(ObservationTest, ReaderReportsEveryProblemWithItsPath) {
     write_json(d + "/cameras.json", j);
   }, {"<dir>/cameras.json", "cameras[1]", "max_depth"});
   expect_read_error("size_mismatch", [](const std::string& d) {
-    write_depth_png(d + "/side/d1.png", random_depth_image(21, 16, 1, 1, 2), 0.0005);
-  }, {"<dir>/side/d1.png", "21x16", "20x16"});
+    write_depth_png(d + "/side/d1.png", random_depth_image(41, 32, 1, 1, 2), 0.0005);
+  }, {"<dir>/side/d1.png", "41x32", "40x32"});
   expect_read_error("missing_frame", [](const std::string& d) { fs::remove(d + "/side/d2.png"); },
                     {"<dir>/side/d2.png", "frame 2", "camera 1 ('side')", "frame_count"});
   expect_read_error("too_many_frames", [](const std::string& d) {
@@ -587,13 +587,13 @@ TEST(ObservationTest, ReaderReportsEveryProblemWithItsPath) {
     write_json(d + "/cameras.json", j);
   }, {"<dir>/cam0/depth_0003.png", "frame 3"});
   expect_read_error("beyond_range", [](const std::string& d) {
-    DepthImage img = random_depth_image(20, 16, 1, 1, 2);
-    img.depth[20 * 2 + 5] = 5.0;  // camera 'side' has max_depth 4
-    img.depth[20 * 3 + 1] = 4.5;
+    DepthImage img = random_depth_image(40, 32, 1, 1, 2);
+    img.depth[40 * 2 + 5] = 5.0;  // camera 'side' has max_depth 4
+    img.depth[40 * 3 + 1] = 4.5;
     write_depth_png(d + "/side/d0.png", img, 0.0005);
   }, {"<dir>/side/d0.png", "2 pixel(s)", "u=5, v=2", "max_depth", "set such pixels to 0"});
   expect_read_error("below_range", [](const std::string& d) {
-    DepthImage img = random_depth_image(24, 18, 1, 1, 2);
+    DepthImage img = random_depth_image(48, 36, 1, 1, 2);
     img.depth[0] = 0.05;  // min_depth 0.1
     write_depth_png(d + "/cam0/depth_0001.png", img, 0.0005);
   }, {"<dir>/cam0/depth_0001.png", "1 pixel(s)", "u=0, v=0"});
@@ -603,23 +603,25 @@ TEST(ObservationTest, ReaderReportsEveryProblemWithItsPath) {
     spit(p, bytes.substr(0, bytes.size() - 30));
   }, {"<dir>/cam0/depth_0000.png", "corrupt or truncated"});
   expect_read_error("eight_bit", [](const std::string& d) {
-    const std::vector<unsigned char> px(24 * 18, 9);
-    write_png_simplified(d + "/cam0/depth_0001.png", 24, 18, PNG_FORMAT_GRAY, px.data());
+    const std::vector<unsigned char> px(48 * 36, 9);
+    write_png_simplified(d + "/cam0/depth_0001.png", 48, 36, PNG_FORMAT_GRAY, px.data());
   }, {"<dir>/cam0/depth_0001.png", "8-bit"});
   TempDir tmp("no_folder");
   expect_input_error([&] { read_observations(tmp / "nothing"); }, {tmp / "nothing", "does not exist"});
 }
 
 TEST(ObservationTest, BoundaryDepthsSurviveQuantisation) {
-  // A depth just below max_depth can round up past it; the reader allows half a unit.
+  // Depths at the ends of the range can round past them; the reader allows half a unit.
   TempDir tmp("boundary");
   ObservationSet set = small_set();
-  set.depth_scale = 0.003;
-  set.frames[0][1].depth[0] = set.cameras[1].max_depth - 1e-6;  // 4.0 - 1e-6 -> 1333.33 units -> 1333
-  set.frames[0][1].depth[1] = set.cameras[1].max_depth;         // 1333.33 units -> rounds to 3.999
-  set.frames[0][0].depth[0] = 5.9995;                           // rounds to 6.000 = 2000 * 0.003
+  set.depth_scale = 0.0024;                // camera 1: range [0.2, 4.0]
+  set.frames[0][1].depth[0] = 4.0;         // 1666.67 units -> 1667 -> 4.0008 m > max_depth
+  set.frames[0][1].depth[1] = 3.9999;      // -> 1667 as well
+  set.frames[0][1].depth[2] = 0.2;         // 83.33 units -> 83 -> 0.1992 m < min_depth
   write_observations(tmp / "obs", set);
-  EXPECT_NO_THROW(read_observations(tmp / "obs"));
+  const ObservationSet back = read_observations(tmp / "obs");
+  EXPECT_GT(back.frames[0][1].depth[0], 4.0);
+  EXPECT_LT(back.frames[0][1].depth[2], 0.2);
 }
 
 }  // namespace

@@ -65,27 +65,34 @@ void find_active_cells(SimGrid& g) {
   }
 }
 
+// Every corner weight is raised to a floor (a fraction of a full cell's h^3/8), so that a
+// node touched by the body only at a point still has a little mass and stiffness and
+// moves with its neighbours instead of falling freely (see docs/validation.md).
 void integrate_cells(SimGrid& g, const GridOptions& opt) {
+  const double floor = opt.min_node_volume * g.h * g.h * g.h / 8.0;
   g.cell_volume_weights.resize(8 * size_t(g.cell_count));
   g.cell_surface_weights.resize(8 * size_t(g.cell_count));
   g.cell_volume.resize(g.cell_count);
   g.cell_area.resize(g.cell_count);
-#pragma omp parallel for schedule(dynamic, 64)
+  int floored = 0;
+#pragma omp parallel for schedule(dynamic, 64) reduction(+ : floored)
   for (int e = 0; e < g.cell_count; ++e) {
     const auto idx = corner_indices(g.sdf, g.cell_origin[e]);
     std::array<double, 8> phi;
     for (int c = 0; c < 8; ++c) phi[c] = g.sdf.phi[idx[c]];
     const CutCellIntegrals r = integrate_cut_cell(phi, g.h, opt.integration_subdivisions);
     for (int c = 0; c < 8; ++c) {
-      g.cell_volume_weights[8 * e + c] = r.volume[c];
+      g.cell_volume_weights[8 * e + c] = std::max(r.volume[c], floor);
       g.cell_surface_weights[8 * e + c] = r.surface[c];
     }
+    for (int c = 0; c < 8; ++c) floored += r.volume[c] < floor;
     g.cell_volume[e] = r.volume_total;
     g.cell_area[e] = r.area_total;
   }
+  g.floored_weights = floored;
 }
 
-void build_node_cell_incidence(SimGrid& g, const GridOptions& opt) {
+void build_node_cell_incidence(SimGrid& g) {
   std::vector<int> count(g.node_count, 0);
   for (int n : g.cell_nodes) ++count[n];
   g.node_cell_offset.assign(g.node_count + 1, 0);
@@ -95,23 +102,19 @@ void build_node_cell_incidence(SimGrid& g, const GridOptions& opt) {
   for (int e = 0; e < g.cell_count; ++e)
     for (int c = 0; c < 8; ++c) g.node_cell_entry[fill[g.cell_nodes[8 * e + c]]++] = 8 * e + c;
 
-  const double floor = opt.min_node_volume * g.h * g.h * g.h / 8.0;
   g.node_volume.assign(g.node_count, 0.0);
-  g.floored_nodes = 0;
   g.total_volume = 0;
   Eigen::Vector3d moment = Eigen::Vector3d::Zero();
   for (int a = 0; a < g.node_count; ++a) {
     double v = 0;
     for (int k = g.node_cell_offset[a]; k < g.node_cell_offset[a + 1]; ++k) v += g.cell_volume_weights[g.node_cell_entry[k]];
-    g.total_volume += v;
     moment += v * Eigen::Vector3d(g.node_rest[3 * a], g.node_rest[3 * a + 1], g.node_rest[3 * a + 2]);
-    if (v < floor) {
-      v = floor;
-      ++g.floored_nodes;
-    }
     g.node_volume[a] = v;
   }
-  g.rest_center_of_mass = moment / g.total_volume;
+  for (double v : g.cell_volume) g.total_volume += v;
+  double lumped = 0;
+  for (double v : g.node_volume) lumped += v;
+  g.rest_center_of_mass = moment / lumped;
 }
 
 // The 12 edges of a cell as corner pairs.
@@ -227,7 +230,7 @@ SimGrid build_sim_grid(SdfGrid sdf, const GridOptions& options, const std::strin
                                  "nothing to simulate; check the object's size and grid.cell_size",
                                  source));
   integrate_cells(g, options);
-  build_node_cell_incidence(g, options);
+  build_node_cell_incidence(g);
   build_collision_points(g);
   build_band(g, options.band_width);
   return g;

@@ -23,7 +23,7 @@ struct GridOptions {
   double zero_cutoff = 0.01;           // in cell sizes
   int band_width = 0;                  // in grid steps; <= 0: whole grid
   int integration_subdivisions = 4;    // per axis, for cut cells
-  double min_node_volume = 1e-3;       // floor on a node's volume, in units of h^3/8
+  double min_node_volume = 1e-3;       // floor on every corner weight, in units of h^3/8
 };
 
 struct CollisionPoint {
@@ -39,7 +39,7 @@ struct SimGrid {
 
   std::vector<long> cell_origin;              // flat SDF index of corner 0, per cell
   std::vector<int> cell_nodes;                // 8 per cell: active node id of each corner
-  std::vector<double> cell_volume_weights;    // 8 per cell, m^3
+  std::vector<double> cell_volume_weights;    // 8 per cell, m^3 (at least the floor)
   std::vector<double> cell_surface_weights;   // 8 per cell, m^2
   std::vector<double> cell_volume;            // per cell, m^3
   std::vector<double> cell_area;              // per cell, m^2
@@ -47,8 +47,8 @@ struct SimGrid {
 
   std::vector<long> node_grid;                // flat SDF index per active node
   std::vector<double> node_rest;              // 3 per active node, world position
-  std::vector<double> node_volume;            // per active node (floored), m^3
-  int floored_nodes = 0;                      // nodes whose volume was raised to the floor
+  std::vector<double> node_volume;            // per active node: sum of its corner weights, m^3
+  int floored_weights = 0;                    // corner weights raised to the floor
   std::vector<int> node_cell_offset;          // CSR over active nodes ...
   std::vector<int> node_cell_entry;           // ... entries cell * 8 + corner, ascending
 
@@ -61,7 +61,7 @@ struct SimGrid {
   std::vector<int> band_degree;               // active + band neighbours
   std::vector<int> grid_kind;                 // per SDF node: active id >= 0, -(band id) - 2, or -1
 
-  double total_volume = 0;                    // m^3 (unfloored)
+  double total_volume = 0;                    // m^3, the body's cut volume (no floor)
   Eigen::Vector3d rest_center_of_mass = Eigen::Vector3d::Zero();
 
   static int band_ref_of_active(int active) { return -active - 2; }

@@ -95,7 +95,7 @@ int run_simulate(const SimulateOptions& o) {
                      {"band_nodes", grid.band_count},
                      {"contact_points", grid.collision_points.size()},
                      {"volume", grid.total_volume},
-                     {"floored_nodes", grid.floored_nodes}};
+                     {"floored_weights", grid.floored_weights}};
   summary["mass"] = sim.total_mass();
   nlohmann::json probe_list = nlohmann::json::array();
   for (const auto& p : probes) probe_list.push_back(vec_json(p));
