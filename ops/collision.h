@@ -58,5 +58,33 @@ SSC_HD inline Vec3<Real> contact_force(Vec3<Real> x, Vec3<Real> v, Real area, co
   return f;
 }
 
+// Adjoint of contact_force for the cotangent f_bar: accumulates x_bar, v_bar and, per
+// plane, normal_bar and height_bar (the plane's stiffness and sharpness are not
+// optimised). With F = f_cur + theta dt fdot and force F n:
+//   dF/d dist = -k A (s' + theta dt s'' (n.v)),  dF/d(n.v) = -k A theta dt s',
+//   s'' = -alpha s' (1 - s').
+template <class Real>
+SSC_HD inline void adj_contact_force(Vec3<Real> x, Vec3<Real> v, Real area, const GroundPlane<Real>* planes,
+                                     int plane_count, Real dt, Real theta, Vec3<Real> f_bar, Vec3<Real>& x_bar,
+                                     Vec3<Real>& v_bar, Vec3<Real>* normal_bar, Real* height_bar) {
+  for (int p = 0; p < plane_count; ++p) {
+    const GroundPlane<Real>& g = planes[p];
+    const Real dist = dot(g.normal, x) - g.height;
+    const Real nv = dot(g.normal, v);
+    const Real s = softmin(dist, g.alpha);
+    const Real s1 = softmin_derivative(dist, g.alpha);
+    const Real s2 = -g.alpha * s1 * (Real(1) - s1);
+    const Real kA = g.stiffness * area;
+    const Real F = -kA * s - theta * dt * kA * s1 * nv;
+    const Real F_bar = dot(f_bar, g.normal);
+    const Real dist_bar = F_bar * (-kA * (s1 + theta * dt * s2 * nv));
+    const Real nv_bar = F_bar * (-kA * theta * dt * s1);
+    x_bar += dist_bar * g.normal;
+    v_bar += nv_bar * g.normal;
+    normal_bar[p] += F * f_bar + dist_bar * x + nv_bar * v;
+    height_bar[p] -= dist_bar;
+  }
+}
+
 }  // namespace ops
 }  // namespace ssc

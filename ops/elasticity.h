@@ -135,5 +135,77 @@ SSC_HD inline Mat3<Real> cell_deformation_gradient(const Vec3<Real>* u, Real h) 
   return F;
 }
 
+// ---- adjoints (reverse mode); each accumulates (+=) into its bar arguments ----
+
+// Adjoint of cell_deformation_gradient: u_bar_c += 1/(4h) F_bar s_c.
+template <class Real>
+SSC_HD inline void adj_cell_deformation_gradient(const Mat3<Real>& F_bar, Real h, Vec3<Real>* u_bar) {
+  const Real s = Real(1) / (Real(4) * h);
+  for (int c = 0; c < 8; ++c)
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) u_bar[c][i] += s * F_bar.m[i][j] * (corner_bit(c, j) ? Real(1) : Real(-1));
+}
+
+// K = lambda K_l + mu K_m is linear in the Lame parameters; z = K q and the two parts.
+template <class Real>
+SSC_HD inline void element_stiffness_parts(const Real* w, Real h, const Vec3<Real>* q, Vec3<Real>* z_lambda,
+                                           Vec3<Real>* z_mu) {
+  element_stiffness_apply(w, Real(1), Real(0), h, q, z_lambda);
+  element_stiffness_apply(w, Real(0), Real(1), h, q, z_mu);
+}
+
+// Adjoint of corotated_apply (y = R K R^T p) for the cotangent y_bar.
+template <class Real>
+SSC_HD inline void adj_corotated_apply(const Mat3<Real>& R, const Real* w, Real lambda, Real mu, Real h,
+                                       const Vec3<Real>* p, const Vec3<Real>* y_bar, Mat3<Real>& R_bar,
+                                       Real& lambda_bar, Real& mu_bar, Vec3<Real>* p_bar) {
+  Vec3<Real> q[8], zl[8], zm[8], z_bar[8], q_bar[8];
+  for (int c = 0; c < 8; ++c) q[c] = mul_transposed(R, p[c]);
+  element_stiffness_parts(w, h, q, zl, zm);
+  for (int c = 0; c < 8; ++c) {
+    const Vec3<Real> z = lambda * zl[c] + mu * zm[c];
+    R_bar = R_bar + outer(y_bar[c], z);
+    z_bar[c] = mul_transposed(R, y_bar[c]);
+    lambda_bar += dot(z_bar[c], zl[c]);
+    mu_bar += dot(z_bar[c], zm[c]);
+  }
+  element_stiffness_apply(w, lambda, mu, h, z_bar, q_bar);  // K is symmetric
+  for (int c = 0; c < 8; ++c) {
+    p_bar[c] += R * q_bar[c];
+    R_bar = R_bar + outer(p[c], q_bar[c]);
+  }
+}
+
+// Adjoint of corotation_offset_force (f = -R K (R^T x - x)) for the cotangent f_bar.
+template <class Real>
+SSC_HD inline void adj_corotation_offset_force(const Mat3<Real>& R, const Real* w, Real lambda, Real mu, Real h,
+                                               const Vec3<Real>* f_bar, Mat3<Real>& R_bar, Real& lambda_bar,
+                                               Real& mu_bar) {
+  Vec3<Real> x[8], q[8], zl[8], zm[8], z_bar[8], q_bar[8];
+  for (int c = 0; c < 8; ++c) {
+    x[c] = corner_offset<Real>(c, h);
+    q[c] = mul_transposed(R, x[c]) - x[c];
+  }
+  element_stiffness_parts(w, h, q, zl, zm);
+  for (int c = 0; c < 8; ++c) {
+    const Vec3<Real> z = lambda * zl[c] + mu * zm[c];
+    R_bar = R_bar - outer(f_bar[c], z);
+    z_bar[c] = -mul_transposed(R, f_bar[c]);
+    lambda_bar += dot(z_bar[c], zl[c]);
+    mu_bar += dot(z_bar[c], zm[c]);
+  }
+  element_stiffness_apply(w, lambda, mu, h, z_bar, q_bar);
+  for (int c = 0; c < 8; ++c) R_bar = R_bar + outer(x[c], q_bar[c]);
+}
+
+// Adjoint of lame_from_young.
+template <class Real>
+SSC_HD inline void adj_lame_from_young(Real E, Real nu, Real lambda_bar, Real mu_bar, Real& E_bar, Real& nu_bar) {
+  const Real a = Real(1) + nu, b = Real(1) - Real(2) * nu;
+  E_bar += mu_bar / (Real(2) * a) + lambda_bar * nu / (a * b);
+  // d mu/d nu = -E / (2 a^2);  d lambda/d nu = E (1 + 2 nu^2) / (a b)^2
+  nu_bar += -mu_bar * E / (Real(2) * a * a) + lambda_bar * E * (Real(1) + Real(2) * nu * nu) / (a * a * b * b);
+}
+
 }  // namespace ops
 }  // namespace ssc

@@ -23,7 +23,7 @@ SSC_HD inline int polar_rotation(const Mat3<Real>& F, Mat3<Real>& R) {
     R = identity3<Real>();
     return kPolarDegenerate;
   }
-  const Real tol = sizeof(Real) == 8 ? Real(1e-14) : Real(1e-6);
+  const Real tol = Real(sizeof(Real) == 4 ? 1e-6 : 1e-14);
   Mat3<Real> X = F;
   for (int it = 0; it < 40; ++it) {
     const Real dx = det(X);
@@ -46,6 +46,27 @@ SSC_HD inline int polar_rotation(const Mat3<Real>& F, Mat3<Real>& R) {
   }
   R = X;
   return kPolarNotConverged;
+}
+
+// Adjoint of polar_rotation by the implicit function theorem: with S = R^T F,
+//   F_bar = R [h]x,   h = (tr(S) I - S)^-1 axial(R^T R_bar - R_bar^T R),
+// where axial(K) = (K32, K13, K21). A degenerate cell (R = I, a constant) has F_bar = 0.
+template <class Real>
+SSC_HD inline void adj_polar_rotation(const Mat3<Real>& F, const Mat3<Real>& R, int status, const Mat3<Real>& R_bar,
+                                      Mat3<Real>& F_bar) {
+  if (status == kPolarDegenerate) return;
+  const Mat3<Real> S = mul_transposed_left(R, F);
+  const Mat3<Real> X = mul_transposed_left(R, R_bar);
+  const Vec3<Real> a = make_vec3(X.m[2][1] - X.m[1][2], X.m[0][2] - X.m[2][0], X.m[1][0] - X.m[0][1]);
+  Mat3<Real> G = (-Real(1)) * S;
+  const Real tr = trace(S);
+  for (int i = 0; i < 3; ++i) G.m[i][i] += tr;
+  const Vec3<Real> hv = inverse(G) * a;
+  Mat3<Real> H;  // [h]x
+  H.m[0][0] = Real(0); H.m[0][1] = -hv.z; H.m[0][2] = hv.y;
+  H.m[1][0] = hv.z;    H.m[1][1] = Real(0); H.m[1][2] = -hv.x;
+  H.m[2][0] = -hv.y;   H.m[2][1] = hv.x;  H.m[2][2] = Real(0);
+  F_bar = F_bar + R * H;
 }
 
 }  // namespace ops

@@ -102,6 +102,17 @@ template <class Real> SSC_HD inline Vec3<Real> mul_transposed(const Mat3<Real>& 
           a.m[0][1] * v.x + a.m[1][1] * v.y + a.m[2][1] * v.z,
           a.m[0][2] * v.x + a.m[1][2] * v.y + a.m[2][2] * v.z};
 }
+// a^T b without forming the transpose.
+template <class Real> SSC_HD inline Mat3<Real> mul_transposed_left(const Mat3<Real>& a, const Mat3<Real>& b) {
+  Mat3<Real> r;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      Real s = Real(0);
+      for (int k = 0; k < 3; ++k) s += a.m[k][i] * b.m[k][j];
+      r.m[i][j] = s;
+    }
+  return r;
+}
 template <class Real> SSC_HD inline Real trace(const Mat3<Real>& a) { return a.m[0][0] + a.m[1][1] + a.m[2][2]; }
 template <class Real> SSC_HD inline Real det(const Mat3<Real>& a) {
   return a.m[0][0] * (a.m[1][1] * a.m[2][2] - a.m[1][2] * a.m[2][1]) -

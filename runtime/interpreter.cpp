@@ -12,6 +12,7 @@
 #include "ops/gather.h"
 #include "ops/newmark.h"
 #include "ops/polar.h"
+#include "runtime/cpu_kernels.h"
 #include "runtime/pcg.h"
 
 namespace ssc {
@@ -32,7 +33,11 @@ static std::vector<Real> real_copy(const std::vector<double>& v) {
 
 template <class Real>
 Interpreter<Real>::Interpreter(const Graph& graph, const SimGrid& grid, int batch, const SolverOptions& options)
-    : graph_(graph), grid_(grid), options_(options), store_(graph, domain_sizes(grid), batch) {
+    : graph_(graph),
+      grid_(grid),
+      options_(options),
+      store_(graph, domain_sizes(grid), batch),
+      adjoint_(graph, domain_sizes(grid), batch) {
   graph_.validate();
   for (const CollisionPoint& p : grid.collision_points) point_t_.push_back(Real(p.t));
   weights_ = real_copy<Real>(grid.cell_volume_weights);
@@ -49,46 +54,6 @@ void Interpreter<Real>::run() {
   for (const OpNode& op : graph_.ops()) execute(op);
 }
 
-namespace {
-
-template <class Real>
-struct Binder {
-  TensorStore<Real>& store;
-  const OpNode& op;
-  int b;
-  const Real* in(const char* slot) const { return store.data(op.input(slot), b); }
-  Real* out(const char* slot) const { return store.data(op.output(slot), b); }
-  Real scalar(const char* slot, int k = 0) const { return in(slot)[k]; }
-  bool has_input(const char* slot) const {
-    for (const OpArg& a : op.inputs)
-      if (a.slot == slot) return true;
-    return false;
-  }
-};
-
-template <class Real>
-Mat3<Real> load_rotation(const Real* r, int cell) {
-  Mat3<Real> R;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) R.m[i][j] = r[9 * cell + 3 * i + j];
-  return R;
-}
-
-// Per-corner K p for every cell (the matrix-free stiffness product).
-template <class Real>
-void stiffness_apply_cells(const SimGrid& g, const Real* rotation, const Real* weights, Real lambda, Real mu,
-                           const Real* p, Real* corner_out) {
-  const Real h = Real(g.h);
-#pragma omp parallel for schedule(static)
-  for (int e = 0; e < g.cell_count; ++e) {
-    Vec3<Real> pc[8], y[8];
-    ops::load_cell_corners(p, g.cell_nodes.data(), e, pc);
-    ops::corotated_apply(load_rotation(rotation, e), weights + 8 * e, lambda, mu, h, pc, y);
-    for (int c = 0; c < 8; ++c) store3(corner_out, 8 * e + c, y[c]);
-  }
-}
-
-}  // namespace
 
 template <class Real>
 void Interpreter<Real>::execute(const OpNode& op) {
@@ -202,46 +167,11 @@ void Interpreter<Real>::execute(const OpNode& op) {
       case OpKind::NewmarkSolve: {
         const auto c = ops::newmark_coefficients(a.scalar("dt"), a.scalar("theta"), a.scalar("mass_damping"),
                                                  a.scalar("stiffness_damping"));
-        const Real* rot = a.in("rotation");
-        const Real lambda = a.scalar("lambda"), mu = a.scalar("mu");
-        const Real *m = a.in("mass"), *rhs = a.in("rhs"), *u_prev = a.in("u_prev"), *v_prev = a.in("v_prev");
-        const Real* fixed = a.in("fixed");
+        const Real *u_prev = a.in("u_prev"), *v_prev = a.in("v_prev"), *fixed = a.in("fixed");
         Real* u = a.out("u");
-        const long n = 3L * g.node_count;
-        // Jacobi preconditioner from the exact diagonal of A.
-        std::vector<Real> corner_diag(24 * size_t(g.cell_count)), inv_diag(n), b_free(n), corner(24 * size_t(g.cell_count));
-#pragma omp parallel for schedule(static)
-        for (int e = 0; e < g.cell_count; ++e) {
-          Vec3<Real> d[8];
-          ops::corotated_diagonal(load_rotation(rot, e), weights.data() + 8 * e, lambda, mu, h, d);
-          for (int k = 0; k < 8; ++k) store3(corner_diag.data(), 8 * e + k, d[k]);
-        }
-#pragma omp parallel for schedule(static)
-        for (int i = 0; i < g.node_count; ++i) {
-          const Vec3<Real> kd = ops::gather_corner_sum(corner_diag.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
-          const Vec3<Real> d = ops::newmark_system_apply(c, m[i], make_vec3(Real(1), Real(1), Real(1)), kd);
-          const bool fix = fixed[i] != Real(0);
-          for (int k = 0; k < 3; ++k) {
-            inv_diag[3 * i + k] = fix ? Real(1) : Real(1) / d[k];
-            b_free[3 * i + k] = fix ? Real(0) : rhs[3 * i + k];
-            // initial guess u- + dt v-
-            u[3 * i + k] = fix ? Real(0) : u_prev[3 * i + k] + c.dt * v_prev[3 * i + k];
-          }
-        }
-        auto apply = [&](const Real* p, Real* q) {
-          stiffness_apply_cells(g, rot, weights.data(), lambda, mu, p, corner.data());
-#pragma omp parallel for schedule(static)
-          for (int i = 0; i < g.node_count; ++i) {
-            const Vec3<Real> kp = ops::gather_corner_sum(corner.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
-            // Fixed nodes: identity rows and columns (their p and u are kept at 0).
-            const bool fix = fixed[i] != Real(0);
-            store3(q, i, fix ? load3(p, i) : ops::newmark_system_apply(c, m[i], load3(p, i), kp));
-          }
-        };
-        // Zero the fixed entries of every search direction by projecting p in apply:
-        // with b and x0 zero there, CG keeps them zero.
-        const PcgResult r = jacobi_pcg<Real>(n, apply, inv_diag.data(), b_free.data(), u, options_.cg_tolerance,
-                                             options_.cg_max_iterations);
+        for (int i = 0; i < 3 * g.node_count; ++i) u[i] = fixed[i / 3] != Real(0) ? Real(0) : u_prev[i] + c.dt * v_prev[i];
+        const NewmarkSystem<Real> system{g, weights, a.in("rotation"), a.scalar("lambda"), a.scalar("mu"), a.in("mass"), fixed, c};
+        const PcgResult r = system.solve(a.in("rhs"), u, options_.cg_tolerance, options_.cg_max_iterations);
         report_.cg_iterations[b] = r.iterations;
         report_.cg_residual[b] = r.relative_residual;
         a.out("cg_iterations")[0] = Real(r.iterations);
@@ -263,10 +193,8 @@ void Interpreter<Real>::execute(const OpNode& op) {
       }
       case OpKind::ExtensionSolve: {
         const Real* u = a.in("u");
-        const Real* guess = a.in("band_guess");
         Real* x = a.out("band_u");
-        const long n = 3L * g.band_count;
-        std::vector<Real> rhs(n), inv_diag(n);
+        std::vector<Real> rhs(3 * size_t(g.band_count));
         for (int i = 0; i < g.band_count; ++i) {
           Vec3<Real> s = zero3<Real>();
           for (int d = 0; d < 6; ++d) {
@@ -274,22 +202,9 @@ void Interpreter<Real>::execute(const OpNode& op) {
             if (nb <= -2) s += load3(u, -nb - 2);
           }
           store3(rhs.data(), i, s);
-          for (int k = 0; k < 3; ++k) inv_diag[3 * i + k] = Real(1) / Real(g.band_degree[i]);
-          for (int k = 0; k < 3; ++k) x[3 * i + k] = guess[3 * i + k];
         }
-        auto apply = [&](const Real* p, Real* q) {
-#pragma omp parallel for schedule(static)
-          for (int i = 0; i < g.band_count; ++i) {
-            Vec3<Real> s = Real(g.band_degree[i]) * load3(p, i);
-            for (int d = 0; d < 6; ++d) {
-              const int nb = g.band_neighbors[6 * i + d];
-              if (nb >= 0) s -= load3(p, nb);
-            }
-            store3(q, i, s);
-          }
-        };
-        const PcgResult r = jacobi_pcg<Real>(n, apply, inv_diag.data(), rhs.data(), x, options_.extension_tolerance,
-                                             options_.extension_max_iterations);
+        std::copy_n(a.in("band_guess"), rhs.size(), x);
+        const PcgResult r = solve_band_laplacian(g, rhs.data(), x, options_.extension_tolerance, options_.extension_max_iterations);
         report_.extension_iterations[b] = r.iterations;
         if (!r.converged)
           throw SimulationError(fmt::format("the displacement extension did not converge (batch item {}): relative "

@@ -45,13 +45,24 @@ class Interpreter {
   void run();
   const RunReport& report() const { return report_; }
 
+  // Reverse mode. adjoint() holds one cotangent per tensor, laid out like store().
+  // run_adjoint() runs the ops' adjoints in reverse order on the values of the last
+  // run(), accumulating (+=) into the adjoints of their inputs. Seed the adjoints of the
+  // step's outputs first; clear_adjoints() zeroes all but the graph inputs' (parameter
+  // gradients accumulate over steps) unless told otherwise.
+  TensorStore<Real>& adjoint() { return adjoint_; }
+  void clear_adjoints(bool including_inputs);
+  void run_adjoint();
+
  private:
   void execute(const OpNode& op);
+  void execute_adjoint(const OpNode& op);
 
   const Graph& graph_;
   const SimGrid& grid_;
   SolverOptions options_;
   TensorStore<Real> store_;
+  TensorStore<Real> adjoint_;
   RunReport report_;
   std::vector<Real> point_t_;  // collision point edge parameters, in Real
   std::vector<Real> weights_;    // cut-cell volume weights, in Real

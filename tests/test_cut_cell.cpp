@@ -118,8 +118,9 @@ TEST(CutCellIntegrals, AxisPlaneCutsMatchClosedForm) {
 }
 
 // Oblique corner cut x + y + z <= s around corner 0 (or its mirror image around corner 7).
-// Over the simplex, moments of a product of k distinct coordinates are s^(3+k) k!... :
-// volume m_k = s^3/6, s^4/24, s^5/120, s^6/720; on the triangle A, A s/3, A s^2/12, A s^3/60.
+// Integrals of a product of k distinct coordinates (k = 0..3), from the Dirichlet moments
+// of a simplex: over the corner tetrahedron s^3/6, s^4/24, s^5/120, s^6/720; over the cut
+// triangle (area A) A, A s/3, A s^2/12, A s^3/60.
 TEST(CutCellIntegrals, ObliqueCornerCutMatchesClosedForm) {
   const double h = 0.5, s = 0.6, area = std::sqrt(3.0) / 2 * s * s;
   const double vol_moment[4] = {s * s * s / 6, std::pow(s, 4) / 24, std::pow(s, 5) / 120,

@@ -175,7 +175,7 @@ TEST(GeometryPrimitives, SphereTranslatedAndScaled) {
 TEST(GeometryPrimitives, BoxExactOutsideCornersAndInside) {
   Primitive b = make(PrimitiveType::Box);
   b.half_extents = {1.0, 0.2, 0.3};
-  EXPECT_NEAR(primitive_sdf(b, {2, 1.2, 1.3}), std::sqrt(3.0), 1e-12);  // corner region
+  EXPECT_NEAR(primitive_sdf(b, {2, 1.2, 1.3}), std::sqrt(3.0), 1e-12);        // corner region
   EXPECT_NEAR(primitive_sdf(b, {1.5, 0.6, 0}), std::hypot(0.5, 0.4), 1e-12);  // edge region
   EXPECT_NEAR(primitive_sdf(b, {0.5, 0, 0}), -0.2, 1e-12);  // inside: nearest face is y
   EXPECT_NEAR(primitive_sdf(b, {0.9, 0.0, 0.25}), -0.05, 1e-12);
@@ -217,7 +217,7 @@ TEST(GeometryPrimitives, CapsuleAlongLocalY) {
   EXPECT_NEAR(primitive_sdf(c, {0.5, 0.3, 0}), 0.25, 1e-12);
   EXPECT_NEAR(primitive_sdf(c, {0, -0.5, 0}), -0.25, 1e-12);
   EXPECT_NEAR(primitive_sdf(c, {0.3, -0.9, 0}), 0.25, 1e-12);  // 0.5 from the lower end
-  c.transform.rotation_deg = {0, 0, 90};  // segment along world x
+  c.transform.rotation_deg = {0, 0, 90};                       // segment along world x
   EXPECT_NEAR(primitive_sdf(c, {1.0, 0, 0}), 0.25, 1e-12);
   EXPECT_NEAR(primitive_sdf(c, {0, 1.0, 0}), 0.75, 1e-12);
 }
@@ -225,17 +225,17 @@ TEST(GeometryPrimitives, CapsuleAlongLocalY) {
 TEST(GeometryPrimitives, BoundsContainRotatedShapes) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> unit(-1, 1);
-  for (PrimitiveType type : {PrimitiveType::Sphere, PrimitiveType::Box, PrimitiveType::Torus,
-                             PrimitiveType::Capsule}) {
+  for (PrimitiveType type :
+       {PrimitiveType::Sphere, PrimitiveType::Box, PrimitiveType::Torus, PrimitiveType::Capsule}) {
     Primitive p = make(type);
     p.transform = {{0.5, -1, 2}, {33, -48, 71}, 1.7};
     const Eigen::AlignedBox3d bounds = primitive_bounds(p);
     const Eigen::AlignedBox3d search(bounds.min().array() - 2.0, bounds.max().array() + 2.0);
     int inside = 0;
     for (int n = 0; n < 20000; ++n) {
-      const Vector3d q = search.center() + 0.5 * (search.sizes().array() *
-                                                  Eigen::Array3d(unit(rng), unit(rng), unit(rng)))
-                                                     .matrix();
+      const Vector3d q =
+          search.center() +
+          0.5 * (search.sizes().array() * Eigen::Array3d(unit(rng), unit(rng), unit(rng))).matrix();
       if (primitive_sdf(p, q) >= 0) continue;
       ++inside;
       EXPECT_TRUE(bounds.contains(q)) << primitive_type_name(type);
@@ -348,8 +348,9 @@ TEST(GeometrySdfFile, SaveRefusesGridsTheFormatCannotHold) {
   EXPECT_NO_THROW(save_sdf_file(dir.file("c.sdf"), g));
   g.phi[3] = std::numeric_limits<double>::infinity();
   EXPECT_THROW(save_sdf_file(dir.file("d.sdf"), g), InputError);
-  EXPECT_THROW(save_sdf_file((dir.path() / "missing" / "e.sdf").string(), load_sdf_file(dir.file("c.sdf"))),
-               InputError);
+  EXPECT_THROW(
+      save_sdf_file((dir.path() / "missing" / "e.sdf").string(), load_sdf_file(dir.file("c.sdf"))),
+      InputError);
 }
 
 TEST(GeometrySdfFile, EveryDefectIsReportedWithThePath) {
@@ -378,11 +379,13 @@ TEST(GeometrySdfFile, EveryDefectIsReportedWithThePath) {
   std::vector<float> with_nan = good;
   with_nan[5] = std::nanf("");
   with_nan[7] = std::numeric_limits<float>::infinity();
-  const std::string nan_message = error_for("nan.sdf", sdf_bytes(2, {0, 0, 0}, {2, 2, 2}, with_nan));
+  const std::string nan_message =
+      error_for("nan.sdf", sdf_bytes(2, {0, 0, 0}, {2, 2, 2}, with_nan));
   EXPECT_CONTAINS(nan_message, "2 NaN or infinite");
   EXPECT_CONTAINS(nan_message, "node index 5");
-  EXPECT_CONTAINS(error_for("outside.sdf", sdf_bytes(2, {0, 0, 0}, {2, 2, 2}, std::vector<float>(8, 1.f))),
-                  "nothing is inside");
+  EXPECT_CONTAINS(
+      error_for("outside.sdf", sdf_bytes(2, {0, 0, 0}, {2, 2, 2}, std::vector<float>(8, 1.f))),
+      "nothing is inside");
 }
 
 // ---------------------------------------------------------------------------------------
@@ -517,8 +520,9 @@ TEST(GeometryMesh, PlyErrors) {
   EXPECT_CONTAINS(message, "out of range");
   write_file(dir.file("nan.ply"), header + "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n");
   EXPECT_CONTAINS(input_error_of([&] { load_mesh(dir.file("nan.ply")); }), "line 11");
-  write_file(dir.file("noface.ply"), "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
-                                     "property float y\nproperty float z\nend_header\n0 0 0\n");
+  write_file(dir.file("noface.ply"),
+             "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+             "property float y\nproperty float z\nend_header\n0 0 0\n");
   EXPECT_CONTAINS(input_error_of([&] { load_mesh(dir.file("noface.ply")); }), "no faces");
   write_file(dir.file("notply.ply"), "solid x\n");
   EXPECT_CONTAINS(input_error_of([&] { load_mesh(dir.file("notply.ply")); }), "'ply'");
@@ -580,14 +584,14 @@ TriangleMesh unit_cube_mesh() {
 TriangleMesh icosphere(int subdivisions) {
   TriangleMesh m;
   const double t = (1 + std::sqrt(5.0)) / 2;
-  for (const Vector3d& v : {Vector3d(-1, t, 0), Vector3d(1, t, 0), Vector3d(-1, -t, 0),
-                            Vector3d(1, -t, 0), Vector3d(0, -1, t), Vector3d(0, 1, t),
-                            Vector3d(0, -1, -t), Vector3d(0, 1, -t), Vector3d(t, 0, -1),
-                            Vector3d(t, 0, 1), Vector3d(-t, 0, -1), Vector3d(-t, 0, 1)})
+  for (const Vector3d& v :
+       {Vector3d(-1, t, 0), Vector3d(1, t, 0), Vector3d(-1, -t, 0), Vector3d(1, -t, 0),
+        Vector3d(0, -1, t), Vector3d(0, 1, t), Vector3d(0, -1, -t), Vector3d(0, 1, -t),
+        Vector3d(t, 0, -1), Vector3d(t, 0, 1), Vector3d(-t, 0, -1), Vector3d(-t, 0, 1)})
     m.vertices.push_back(v.normalized());
-  m.faces = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+  m.faces = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
              {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-             {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+             {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int s = 0; s < subdivisions; ++s) {
     std::map<std::pair<int, int>, int> midpoints;
     auto midpoint = [&](int a, int b) {
@@ -651,8 +655,9 @@ TEST(GeometryMeshSdf, FastWindingNumberAgreesWithExactSum) {
   std::uniform_real_distribution<double> unit(-0.6, 0.6);
   std::vector<Vector3d> points;
   for (int n = 0; n < 400; ++n)
-    points.push_back(box.center() +
-                     (box.sizes().array() * Eigen::Array3d(unit(rng), unit(rng), unit(rng))).matrix());
+    points.push_back(
+        box.center() +
+        (box.sizes().array() * Eigen::Array3d(unit(rng), unit(rng), unit(rng))).matrix());
   const auto exact = winding_numbers(bunny, points, true);
   const auto fast = winding_numbers(bunny, points, false);
   int inside = 0;
@@ -689,8 +694,8 @@ TEST(GeometryMeshSdf, OpenBunnyGetsAPlausibleInside) {
   EXPECT_LT(volume, 1e-3);
   // Scaling the mesh scales the distances.
   const SdfGrid scaled = mesh_to_sdf(bunny, Transform{{0, 0, 0}, {0, 0, 0}, 10}, 10 * h, 3, "b");
-  EXPECT_NEAR(nearest_node_phi(scaled, {-0.2, 0.8, 0.0}), 10 * nearest_node_phi(g, {-0.02, 0.08, 0}),
-              1e-9);
+  EXPECT_NEAR(nearest_node_phi(scaled, {-0.2, 0.8, 0.0}),
+              10 * nearest_node_phi(g, {-0.02, 0.08, 0}), 1e-9);
 }
 
 TEST(GeometryMeshSdf, DragonScanIsFast) {

@@ -32,8 +32,7 @@ double smallest_fitting_cell_size(const Eigen::AlignedBox3d& box, double h, int 
 void check_arguments(const Eigen::AlignedBox3d& box, double h, int border) {
   if (!(h > 0) || !std::isfinite(h))
     throw InputError(fmt::format("cell_size must be a positive number of metres, got {}", h));
-  if (border < 0)
-    throw InputError(fmt::format("border_cells must be >= 0, got {}", border));
+  if (border < 0) throw InputError(fmt::format("border_cells must be >= 0, got {}", border));
   if (box.isEmpty() || !box.min().allFinite() || !box.max().allFinite())
     throw InputError(
         "cannot place a grid around an empty or non-finite bounding box; check that the "

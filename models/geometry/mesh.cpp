@@ -28,9 +28,10 @@ using Eigen::Vector3d;
 std::string read_whole_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in)
-    throw InputError(fmt::format("cannot open mesh file '{}': {}; check the path (relative "
-                                 "paths are taken from the working directory)",
-                                 path, std::strerror(errno)));
+    throw InputError(
+        fmt::format("cannot open mesh file '{}': {}; check the path (relative "
+                    "paths are taken from the working directory)",
+                    path, std::strerror(errno)));
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (in.bad())
     throw InputError(fmt::format("cannot read mesh file '{}'; check its permissions", path));
@@ -45,7 +46,9 @@ std::string lower(std::string s) {
   return s;
 }
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v'; }
+bool is_space(char c) {
+  return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\f' || c == '\v';
+}
 
 std::vector<std::string_view> split(std::string_view line) {
   std::vector<std::string_view> tokens;
@@ -104,9 +107,10 @@ class LineReader {
 
 void require_finite(const std::string& path, const std::string& where, const Vector3d& v) {
   if (!v.allFinite())
-    throw InputError(fmt::format("mesh file '{}', {}: vertex coordinates ({}, {}, {}) are not "
-                                 "finite; repair or re-export the mesh",
-                                 path, where, v.x(), v.y(), v.z()));
+    throw InputError(
+        fmt::format("mesh file '{}', {}: vertex coordinates ({}, {}, {}) are not "
+                    "finite; repair or re-export the mesh",
+                    path, where, v.x(), v.y(), v.z()));
 }
 
 void add_fan(TriangleMesh& mesh, const std::vector<int>& polygon) {
@@ -116,9 +120,10 @@ void add_fan(TriangleMesh& mesh, const std::vector<int>& polygon) {
 
 void require_faces(const std::string& path, const TriangleMesh& mesh) {
   if (mesh.faces.empty())
-    throw InputError(fmt::format("mesh file '{}' has {} vertices but no faces; a point cloud "
-                                 "cannot be turned into a solid, export the surface with faces",
-                                 path, mesh.vertices.size()));
+    throw InputError(
+        fmt::format("mesh file '{}' has {} vertices but no faces; a point cloud "
+                    "cannot be turned into a solid, export the surface with faces",
+                    path, mesh.vertices.size()));
 }
 
 // ---------------------------------------------------------------------------------------
@@ -140,14 +145,16 @@ int parse_obj_index(const std::string& path, int line, std::string_view token, l
   const std::string_view head = token.substr(0, token.find('/'));
   long index;
   if (!parse_integer(head, index) || index == 0)
-    fail_at_line(path, line, fmt::format("'{}' is not a valid face vertex (expected a non-zero "
-                                         "integer, optionally followed by /vt/vn)",
-                                         token));
+    fail_at_line(path, line,
+                 fmt::format("'{}' is not a valid face vertex (expected a non-zero "
+                             "integer, optionally followed by /vt/vn)",
+                             token));
   const long resolved = index > 0 ? index - 1 : vertex_count + index;
   if (resolved < 0 || resolved >= vertex_count)
-    fail_at_line(path, line, fmt::format("face vertex index {} is out of range: only {} vertices "
-                                         "are defined before this line",
-                                         index, vertex_count));
+    fail_at_line(path, line,
+                 fmt::format("face vertex index {} is out of range: only {} vertices "
+                             "are defined before this line",
+                             index, vertex_count));
   return int(resolved);
 }
 
@@ -166,8 +173,7 @@ TriangleMesh load_obj(const std::string& path, const std::string& text) {
       polygon.clear();
       for (std::size_t t = 1; t < tokens.size(); ++t)
         polygon.push_back(parse_obj_index(path, number, tokens[t], long(mesh.vertices.size())));
-      if (polygon.size() < 3)
-        fail_at_line(path, number, "a face needs at least three vertices");
+      if (polygon.size() < 3) fail_at_line(path, number, "a face needs at least three vertices");
       add_fan(mesh, polygon);
     }
   }
@@ -203,11 +209,11 @@ struct PlyHeader {
 
 bool parse_ply_type(std::string_view name, PlyType& type) {
   static const std::pair<const char*, PlyType> kTypes[] = {
-      {"char", PlyType::Int8},     {"int8", PlyType::Int8},      {"uchar", PlyType::UInt8},
-      {"uint8", PlyType::UInt8},   {"short", PlyType::Int16},    {"int16", PlyType::Int16},
-      {"ushort", PlyType::UInt16}, {"uint16", PlyType::UInt16},  {"int", PlyType::Int32},
-      {"int32", PlyType::Int32},   {"uint", PlyType::UInt32},    {"uint32", PlyType::UInt32},
-      {"float", PlyType::Float32}, {"float32", PlyType::Float32}, {"double", PlyType::Float64},
+      {"char", PlyType::Int8},      {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
+      {"uint8", PlyType::UInt8},    {"short", PlyType::Int16},     {"int16", PlyType::Int16},
+      {"ushort", PlyType::UInt16},  {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
+      {"int32", PlyType::Int32},    {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
+      {"float", PlyType::Float32},  {"float32", PlyType::Float32}, {"double", PlyType::Float64},
       {"float64", PlyType::Float64}};
   for (const auto& [n, t] : kTypes)
     if (name == n) {
@@ -219,10 +225,18 @@ bool parse_ply_type(std::string_view name, PlyType& type) {
 
 int ply_type_bytes(PlyType type) {
   switch (type) {
-    case PlyType::Int8: case PlyType::UInt8: return 1;
-    case PlyType::Int16: case PlyType::UInt16: return 2;
-    case PlyType::Int32: case PlyType::UInt32: case PlyType::Float32: return 4;
-    case PlyType::Float64: return 8;
+    case PlyType::Int8:
+    case PlyType::UInt8:
+      return 1;
+    case PlyType::Int16:
+    case PlyType::UInt16:
+      return 2;
+    case PlyType::Int32:
+    case PlyType::UInt32:
+    case PlyType::Float32:
+      return 4;
+    case PlyType::Float64:
+      return 8;
   }
   return 0;
 }
@@ -239,10 +253,14 @@ void parse_ply_header_line(const std::string& path, int line,
   const std::string_view key = tokens[0];
   if (key == "format") {
     if (tokens.size() < 2) fail_at_line(path, line, "'format' needs a value");
-    if (tokens[1] == "ascii") header.format = PlyFormat::Ascii;
-    else if (tokens[1] == "binary_little_endian") header.format = PlyFormat::BinaryLittleEndian;
-    else if (tokens[1] == "binary_big_endian") header.format = PlyFormat::BinaryBigEndian;
-    else fail_at_line(path, line, fmt::format("unknown PLY format '{}'", tokens[1]));
+    if (tokens[1] == "ascii")
+      header.format = PlyFormat::Ascii;
+    else if (tokens[1] == "binary_little_endian")
+      header.format = PlyFormat::BinaryLittleEndian;
+    else if (tokens[1] == "binary_big_endian")
+      header.format = PlyFormat::BinaryBigEndian;
+    else
+      fail_at_line(path, line, fmt::format("unknown PLY format '{}'", tokens[1]));
   } else if (key == "element") {
     long count;
     if (tokens.size() < 3 || !parse_integer(tokens[2], count) || count < 0)
@@ -272,9 +290,10 @@ PlyHeader parse_ply_header(const std::string& path, const std::string& text) {
   LineReader reader(text);
   std::string_view line;
   if (!reader.next(line) || line != "ply")
-    throw InputError(fmt::format("mesh file '{}' does not start with 'ply'; it is not a PLY "
-                                 "file, export it again or fix its extension",
-                                 path));
+    throw InputError(
+        fmt::format("mesh file '{}' does not start with 'ply'; it is not a PLY "
+                    "file, export it again or fix its extension",
+                    path));
   while (reader.next(line)) {
     const auto tokens = split(line);
     if (tokens.empty()) continue;
@@ -285,9 +304,10 @@ PlyHeader parse_ply_header(const std::string& path, const std::string& text) {
     }
     parse_ply_header_line(path, reader.line_number(), tokens, header);
   }
-  throw InputError(fmt::format("mesh file '{}': the PLY header has no 'end_header'; the file "
-                               "is truncated, export it again",
-                               path));
+  throw InputError(
+      fmt::format("mesh file '{}': the PLY header has no 'end_header'; the file "
+                  "is truncated, export it again",
+                  path));
 }
 
 // Reads one element instance per line.
@@ -299,9 +319,10 @@ class PlyAsciiSource {
     std::string_view line;
     do {
       if (!reader_.next(line))
-        throw InputError(fmt::format("mesh file '{}' ends before {} {} (of those its header "
-                                     "declares); the file is truncated, export it again",
-                                     path_, element, index));
+        throw InputError(
+            fmt::format("mesh file '{}' ends before {} {} (of those its header "
+                        "declares); the file is truncated, export it again",
+                        path_, element, index));
       tokens_ = split(line);
     } while (tokens_.empty());
     next_ = 0;
@@ -330,7 +351,9 @@ class PlyAsciiSource {
 class PlyBinarySource {
  public:
   PlyBinarySource(const std::string& path, const std::string& bytes, const PlyHeader& header)
-      : path_(path), bytes_(bytes), pos_(header.body_start),
+      : path_(path),
+        bytes_(bytes),
+        pos_(header.body_start),
         swap_(header.format == PlyFormat::BinaryBigEndian) {}
   void begin(const std::string& element, long index) {
     element_ = &element;
@@ -339,9 +362,10 @@ class PlyBinarySource {
   double next(PlyType type) {
     const int n = ply_type_bytes(type);
     if (pos_ + n > bytes_.size())
-      throw InputError(fmt::format("mesh file '{}' ends inside {} {} (of those its header "
-                                   "declares); the file is truncated, export it again",
-                                   path_, *element_, index_));
+      throw InputError(
+          fmt::format("mesh file '{}' ends inside {} {} (of those its header "
+                      "declares); the file is truncated, export it again",
+                      path_, *element_, index_));
     unsigned char raw[8];
     std::memcpy(raw, bytes_.data() + pos_, n);
     pos_ += n;
@@ -361,14 +385,22 @@ class PlyBinarySource {
   }
   static double decode(PlyType type, const unsigned char* raw) {
     switch (type) {
-      case PlyType::Int8: return as<std::int8_t>(raw);
-      case PlyType::UInt8: return as<std::uint8_t>(raw);
-      case PlyType::Int16: return as<std::int16_t>(raw);
-      case PlyType::UInt16: return as<std::uint16_t>(raw);
-      case PlyType::Int32: return as<std::int32_t>(raw);
-      case PlyType::UInt32: return as<std::uint32_t>(raw);
-      case PlyType::Float32: return as<float>(raw);
-      case PlyType::Float64: return as<double>(raw);
+      case PlyType::Int8:
+        return as<std::int8_t>(raw);
+      case PlyType::UInt8:
+        return as<std::uint8_t>(raw);
+      case PlyType::Int16:
+        return as<std::int16_t>(raw);
+      case PlyType::UInt16:
+        return as<std::uint16_t>(raw);
+      case PlyType::Int32:
+        return as<std::int32_t>(raw);
+      case PlyType::UInt32:
+        return as<std::uint32_t>(raw);
+      case PlyType::Float32:
+        return as<float>(raw);
+      case PlyType::Float64:
+        return as<double>(raw);
     }
     return 0;
   }
@@ -398,15 +430,17 @@ void validate_ply_elements(const std::string& path, const PlyHeader& header) {
     if (e.name == "vertex") {
       for (const char* axis : {"x", "y", "z"})
         if (property_index(e, {axis}) < 0)
-          throw InputError(fmt::format("mesh file '{}': the PLY vertex element has no '{}' "
-                                       "property; export positions as x, y, z",
-                                       path, axis));
+          throw InputError(
+              fmt::format("mesh file '{}': the PLY vertex element has no '{}' "
+                          "property; export positions as x, y, z",
+                          path, axis));
     } else if (e.name == "face") {
       const long p = property_index(e, {"vertex_indices", "vertex_index"});
       if (p < 0 || !e.properties[p].is_list)
-        throw InputError(fmt::format("mesh file '{}': the PLY face element has no list "
-                                     "property 'vertex_indices' (or 'vertex_index')",
-                                     path));
+        throw InputError(
+            fmt::format("mesh file '{}': the PLY face element has no list "
+                        "property 'vertex_indices' (or 'vertex_index')",
+                        path));
     }
   }
 }
@@ -430,22 +464,22 @@ void read_ply_instance(const std::string& path, const PlyElement& element, long 
     if (!(count >= 0) || count > 1e6)
       throw InputError(fmt::format("mesh file '{}', {}: list length {} is invalid", path,
                                    source.where(element.name, index), count));
-    const bool indices = is_face && (property.name == "vertex_indices" ||
-                                     property.name == "vertex_index");
+    const bool indices =
+        is_face && (property.name == "vertex_indices" || property.name == "vertex_index");
     if (indices) polygon.clear();
     for (long c = 0; c < long(count); ++c) {
       const double value = source.next(property.type);
       if (!indices) continue;
       if (!(value >= 0 && value < vertex_count) || value != std::floor(value))
-        throw InputError(fmt::format("mesh file '{}', {}: vertex index {} is out of range "
-                                     "(the file declares {} vertices)",
-                                     path, source.where(element.name, index), value,
-                                     vertex_count));
+        throw InputError(
+            fmt::format("mesh file '{}', {}: vertex index {} is out of range "
+                        "(the file declares {} vertices)",
+                        path, source.where(element.name, index), value, vertex_count));
       polygon.push_back(int(value));
     }
     if (indices && polygon.size() < 3)
-      throw InputError(fmt::format("mesh file '{}', {}: a face needs at least three vertices",
-                                   path, source.where(element.name, index)));
+      throw InputError(fmt::format("mesh file '{}', {}: a face needs at least three vertices", path,
+                                   source.where(element.name, index)));
     if (indices) add_fan(mesh, polygon);
   }
   if (is_vertex) {
@@ -581,9 +615,10 @@ std::string extension_of(const std::string& path) {
 TriangleMesh load_mesh(const std::string& path) {
   const std::string extension = extension_of(path);
   if (extension != ".obj" && extension != ".ply" && extension != ".stl")
-    throw InputError(fmt::format("mesh file '{}' has an unsupported extension '{}'; supported "
-                                 "are .obj, .ply and .stl (or give an .sdf file instead)",
-                                 path, extension));
+    throw InputError(
+        fmt::format("mesh file '{}' has an unsupported extension '{}'; supported "
+                    "are .obj, .ply and .stl (or give an .sdf file instead)",
+                    path, extension));
   const std::string bytes = read_whole_file(path);
   if (extension == ".obj") return load_obj(path, bytes);
   if (extension == ".ply") return load_ply(path, bytes);

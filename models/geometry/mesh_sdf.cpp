@@ -26,9 +26,12 @@ constexpr double kMaxAmbiguousFraction = 0.01;
 constexpr double kAmbiguityMinDistanceCells = 2.0;
 
 struct Triangle {
+  Triangle() = default;
+  Triangle(const Vector3d& a_, const Vector3d& b_, const Vector3d& c_)
+      : a(a_), b(b_), c(c_), centroid((a + b + c) / 3.0), area_normal(0.5 * (b - a).cross(c - a)) {}
   Vector3d a, b, c;
-  Vector3d centroid() const { return (a + b + c) / 3.0; }
-  Vector3d area_normal() const { return 0.5 * (b - a).cross(c - a); }
+  Vector3d centroid;
+  Vector3d area_normal;  // area times unit normal
 };
 
 double segment_squared_distance(const Vector3d& p, const Vector3d& a, const Vector3d& b) {
@@ -61,8 +64,7 @@ double triangle_squared_distance(const Vector3d& p, const Triangle& t) {
   }
   const double sum = va + vb + vc;
   if (!(sum > 0))  // degenerate (zero-area) triangle
-    return std::min({segment_squared_distance(p, t.a, t.b),
-                     segment_squared_distance(p, t.b, t.c),
+    return std::min({segment_squared_distance(p, t.a, t.b), segment_squared_distance(p, t.b, t.c),
                      segment_squared_distance(p, t.c, t.a)});
   return (ap - (vb / sum) * ab - (vc / sum) * ac).squaredNorm();
 }
@@ -73,12 +75,18 @@ double triangle_winding(const Vector3d& q, const Triangle& t) {
   const Vector3d a = t.a - q, b = t.b - q, c = t.c - q;
   const double la = a.norm(), lb = b.norm(), lc = c.norm();
   const double numerator = a.dot(b.cross(c));
+  if (numerator == 0) return 0;  // q in the triangle's plane (or a degenerate triangle)
   const double denominator = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
   return 2.0 * std::atan2(numerator, denominator) / kFourPi;
 }
 
-double box_squared_distance(const Eigen::AlignedBox3d& box, const Vector3d& p) {
-  return (box.min() - p).cwiseMax(p - box.max()).cwiseMax(0.0).squaredNorm();
+inline double box_squared_distance(const Eigen::AlignedBox3d& box, const Vector3d& p) {
+  double sum = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double gap = std::max({box.min()[a] - p[a], p[a] - box.max()[a], 0.0});
+    sum += gap * gap;
+  }
+  return sum;
 }
 
 struct BvhNode {
@@ -86,10 +94,10 @@ struct BvhNode {
   int left = -1, right = -1;  // children; -1 for a leaf
   int begin = 0, end = 0;     // triangle range
   // Far-field expansion of the winding number of the node's triangles.
-  Vector3d area_normal = Vector3d::Zero();     // sum of a_t n_t
-  Vector3d center = Vector3d::Zero();          // area-weighted centroid
+  Vector3d area_normal = Vector3d::Zero();           // sum of a_t n_t
+  Vector3d center = Vector3d::Zero();                // area-weighted centroid
   Eigen::Matrix3d moment = Eigen::Matrix3d::Zero();  // sum of a_t n_t (c_t - center)^T
-  double radius = 0;                           // farthest vertex from center
+  double radius = 0;                                 // farthest vertex from center
   bool is_leaf() const { return left < 0; }
 };
 
@@ -100,17 +108,20 @@ class TriangleBvh {
     build(0, int(triangles_.size()));
   }
 
-  const Triangle& triangle(int index) const { return triangles_[index]; }
-
   // Squared distance to the closest triangle. `hint` is a triangle index that is likely
   // close (the previous query's answer); it is updated.
   double squared_distance(const Vector3d& q, int& hint) const {
     double best = triangle_squared_distance(q, triangles_[hint]);
-    int stack[128], top = 0;
-    stack[top++] = 0;
+    struct Entry {
+      int node;
+      double box_distance2;
+    } stack[128];
+    int top = 0;
+    stack[top++] = {0, box_squared_distance(nodes_[0].box, q)};
     while (top > 0) {
-      const BvhNode& node = nodes_[stack[--top]];
-      if (box_squared_distance(node.box, q) >= best) continue;
+      const Entry entry = stack[--top];
+      if (entry.box_distance2 >= best) continue;
+      const BvhNode& node = nodes_[entry.node];
       if (node.is_leaf()) {
         for (int t = node.begin; t < node.end; ++t) {
           const double d = triangle_squared_distance(q, triangles_[t]);
@@ -118,11 +129,13 @@ class TriangleBvh {
         }
         continue;
       }
-      const double dl = box_squared_distance(nodes_[node.left].box, q);
-      const double dr = box_squared_distance(nodes_[node.right].box, q);
-      // Push the farther child first so the nearer one is visited first.
-      if (dl < dr) stack[top++] = node.right, stack[top++] = node.left;
-      else stack[top++] = node.left, stack[top++] = node.right;
+      const Entry left{node.left, box_squared_distance(nodes_[node.left].box, q)};
+      const Entry right{node.right, box_squared_distance(nodes_[node.right].box, q)};
+      // Push the farther child first so that the nearer one is visited first.
+      if (left.box_distance2 < right.box_distance2)
+        stack[top++] = right, stack[top++] = left;
+      else
+        stack[top++] = left, stack[top++] = right;
     }
     return best;
   }
@@ -174,13 +187,13 @@ class TriangleBvh {
   // Median split along the longest axis of the centroids' box.
   int split(int begin, int end) {
     Eigen::AlignedBox3d centroids;
-    for (int t = begin; t < end; ++t) centroids.extend(triangles_[t].centroid());
+    for (int t = begin; t < end; ++t) centroids.extend(triangles_[t].centroid);
     int axis;
     centroids.sizes().maxCoeff(&axis);
     const int mid = (begin + end) / 2;
-    std::nth_element(triangles_.begin() + begin, triangles_.begin() + mid,
-                     triangles_.begin() + end, [axis](const Triangle& x, const Triangle& y) {
-                       return x.centroid()[axis] < y.centroid()[axis];
+    std::nth_element(triangles_.begin() + begin, triangles_.begin() + mid, triangles_.begin() + end,
+                     [axis](const Triangle& x, const Triangle& y) {
+                       return x.centroid[axis] < y.centroid[axis];
                      });
     return mid;
   }
@@ -193,16 +206,16 @@ class TriangleBvh {
     for (int t = begin; t < end; ++t) {
       const Triangle& tri = triangles_[t];
       node.box.extend(tri.a).extend(tri.b).extend(tri.c);
-      const double a = tri.area_normal().norm();
+      const double a = tri.area_normal.norm();
       area += a;
-      weighted += a * tri.centroid();
-      plain += tri.centroid();
-      node.area_normal += tri.area_normal();
+      weighted += a * tri.centroid;
+      plain += tri.centroid;
+      node.area_normal += tri.area_normal;
     }
     node.center = area > 0 ? Vector3d(weighted / area) : Vector3d(plain / (end - begin));
     for (int t = begin; t < end; ++t) {
       const Triangle& tri = triangles_[t];
-      node.moment += tri.area_normal() * (tri.centroid() - node.center).transpose();
+      node.moment += tri.area_normal * (tri.centroid - node.center).transpose();
       for (const Vector3d* v : {&tri.a, &tri.b, &tri.c})
         node.radius = std::max(node.radius, (*v - node.center).norm());
     }
@@ -238,7 +251,7 @@ std::vector<Triangle> world_triangles(const TriangleMesh& mesh, const Transform&
   std::vector<Triangle> triangles(mesh.faces.size());
   for (std::size_t f = 0; f < triangles.size(); ++f) {
     const Eigen::Vector3i& face = mesh.faces[f];
-    triangles[f] = {world[face[0]], world[face[1]], world[face[2]]};
+    triangles[f] = Triangle(world[face[0]], world[face[1]], world[face[2]]);
   }
   return triangles;
 }
@@ -256,35 +269,56 @@ SdfGrid place_grid(const std::vector<Triangle>& triangles, double cell_size, int
 
 // The fraction of nodes away from the surface whose winding number is neither clearly
 // inside (near 1) nor clearly outside (near 0).
-double ambiguous_fraction(const SdfGrid& grid, const std::vector<double>& distance,
-                          const std::vector<double>& winding) {
+double ambiguous_fraction(const SdfGrid& grid, const std::vector<float>& winding) {
   long far = 0, ambiguous = 0;
-  for (std::size_t n = 0; n < distance.size(); ++n) {
-    if (distance[n] <= kAmbiguityMinDistanceCells * grid.cell_size) continue;
+  for (std::size_t n = 0; n < winding.size(); ++n) {
+    if (std::abs(grid.phi[n]) <= kAmbiguityMinDistanceCells * grid.cell_size) continue;
     ++far;
     if (winding[n] >= kAmbiguousLow && winding[n] <= kAmbiguousHigh) ++ambiguous;
   }
   return far > 0 ? double(ambiguous) / double(far) : 0.0;
 }
 
-void check_inside_is_defined(const SdfGrid& grid, const std::vector<double>& distance,
-                             const std::vector<double>& winding, const std::string& source) {
-  const double fraction = ambiguous_fraction(grid, distance, winding);
+void check_inside_is_defined(const SdfGrid& grid, const std::vector<float>& winding,
+                             const std::string& source) {
+  const double fraction = ambiguous_fraction(grid, winding);
   if (fraction > kMaxAmbiguousFraction)
-    fail(source, fmt::format(
-                     "the mesh is not closed enough to define an inside: {:.1f}% of the grid "
+    fail(source,
+         fmt::format("the mesh is not closed enough to define an inside: {:.1f}% of the grid "
                      "nodes farther than {} cells from the surface have a winding number "
                      "between {} and {} (at most {:.0f}% allowed). Close the holes (e.g. with "
-                     "MeshLab's Filters > Remeshing > Close Holes), make the faces consistently "
+                     "MeshLab's Close Holes filter), make the faces consistently "
                      "oriented, or supply an .sdf file instead",
-                     100.0 * fraction, kAmbiguityMinDistanceCells, kAmbiguousLow,
-                     kAmbiguousHigh, 100.0 * kMaxAmbiguousFraction));
+                     100.0 * fraction, kAmbiguityMinDistanceCells, kAmbiguousLow, kAmbiguousHigh,
+                     100.0 * kMaxAmbiguousFraction));
   if (std::none_of(grid.phi.begin(), grid.phi.end(), [](double v) { return v < 0; }))
-    fail(source, fmt::format(
-                     "no grid node is inside the mesh (cell_size {} m). The faces may be "
+    fail(source,
+         fmt::format("no grid node is inside the mesh (cell_size {} m). The faces may be "
                      "oriented inwards (flip the normals), or the shape is thinner than a cell "
                      "(lower cell_size)",
                      grid.cell_size));
+}
+
+// Sets every node's phi and returns its winding number. Consecutive nodes along x are
+// close, so each thread starts a node's search from the previous node's closest triangle.
+std::vector<float> fill_signed_distances(const TriangleBvh& bvh, SdfGrid& grid) {
+  const long count = grid.node_count();
+  const int nx = grid.size.x(), ny = grid.size.y();
+  std::vector<float> winding(count);
+#pragma omp parallel
+  {
+    int hint = 0;
+#pragma omp for schedule(dynamic, 256)
+    for (long n = 0; n < count; ++n) {
+      const Vector3d q =
+          grid.node_position(int(n % nx), int((n / nx) % ny), int(n / (long(nx) * ny)));
+      const double distance = std::sqrt(bvh.squared_distance(q, hint));
+      const double w = bvh.winding_number(q);
+      winding[n] = float(w);
+      grid.phi[n] = w > 0.5 ? -distance : distance;
+    }
+  }
+  return winding;
 }
 
 }  // namespace
@@ -296,22 +330,8 @@ SdfGrid mesh_to_sdf(const TriangleMesh& mesh, const Transform& transform, double
   SdfGrid grid = place_grid(triangles, cell_size, border_cells, source_name);
   const TriangleBvh bvh(std::move(triangles));
 
-  const long count = grid.node_count();
-  const int nx = grid.size.x(), ny = grid.size.y();
-  std::vector<double> distance(count), winding(count);
-#pragma omp parallel
-  {
-    int hint = 0;
-#pragma omp for schedule(dynamic, 256)
-    for (long n = 0; n < count; ++n) {
-      const int i = int(n % nx), j = int((n / nx) % ny), k = int(n / (long(nx) * ny));
-      const Vector3d q = grid.node_position(i, j, k);
-      distance[n] = std::sqrt(bvh.squared_distance(q, hint));
-      winding[n] = bvh.winding_number(q);
-      grid.phi[n] = winding[n] > 0.5 ? -distance[n] : distance[n];
-    }
-  }
-  check_inside_is_defined(grid, distance, winding, source_name);
+  const std::vector<float> winding = fill_signed_distances(bvh, grid);
+  check_inside_is_defined(grid, winding, source_name);
   return grid;
 }
 

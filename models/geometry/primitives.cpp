@@ -34,23 +34,30 @@ double capsule_sdf(const Vector3d& p, double half_length, double radius) {
 
 double local_sdf(const Primitive& s, const Vector3d& p) {
   switch (s.type) {
-    case PrimitiveType::Sphere: return sphere_sdf(p, s.radius);
-    case PrimitiveType::Box: return box_sdf(p, s.half_extents);
-    case PrimitiveType::Torus: return torus_sdf(p, s.major_radius, s.minor_radius);
-    case PrimitiveType::Capsule: return capsule_sdf(p, s.half_length, s.radius);
+    case PrimitiveType::Sphere:
+      return sphere_sdf(p, s.radius);
+    case PrimitiveType::Box:
+      return box_sdf(p, s.half_extents);
+    case PrimitiveType::Torus:
+      return torus_sdf(p, s.major_radius, s.minor_radius);
+    case PrimitiveType::Capsule:
+      return capsule_sdf(p, s.half_length, s.radius);
   }
   return 0;
 }
 
 Vector3d local_half_size(const Primitive& s) {
   switch (s.type) {
-    case PrimitiveType::Sphere: return Vector3d::Constant(s.radius);
-    case PrimitiveType::Box: return s.half_extents;
+    case PrimitiveType::Sphere:
+      return Vector3d::Constant(s.radius);
+    case PrimitiveType::Box:
+      return s.half_extents;
     case PrimitiveType::Torus: {
       const double outer = s.major_radius + s.minor_radius;
       return {outer, s.minor_radius, outer};
     }
-    case PrimitiveType::Capsule: return {s.radius, s.half_length + s.radius, s.radius};
+    case PrimitiveType::Capsule:
+      return {s.radius, s.half_length + s.radius, s.radius};
   }
   return Vector3d::Zero();
 }
@@ -64,7 +71,9 @@ void require_positive(double value, const char* key, const Primitive& s) {
 void validate(const Primitive& s) {
   require_positive(s.transform.scale, "transform scale", s);
   switch (s.type) {
-    case PrimitiveType::Sphere: require_positive(s.radius, "radius", s); break;
+    case PrimitiveType::Sphere:
+      require_positive(s.radius, "radius", s);
+      break;
     case PrimitiveType::Box:
       for (int a = 0; a < 3; ++a) require_positive(s.half_extents[a], "half_extents", s);
       break;
@@ -96,10 +105,14 @@ PrimitiveType parse_primitive_type(const std::string& name) {
 
 std::string primitive_type_name(PrimitiveType type) {
   switch (type) {
-    case PrimitiveType::Sphere: return "sphere";
-    case PrimitiveType::Box: return "box";
-    case PrimitiveType::Torus: return "torus";
-    case PrimitiveType::Capsule: return "capsule";
+    case PrimitiveType::Sphere:
+      return "sphere";
+    case PrimitiveType::Box:
+      return "box";
+    case PrimitiveType::Torus:
+      return "torus";
+    case PrimitiveType::Capsule:
+      return "capsule";
   }
   return "unknown";
 }

@@ -16,10 +16,10 @@ enum class PrimitiveType { Sphere, Box, Torus, Capsule };
 
 struct Primitive {
   PrimitiveType type = PrimitiveType::Sphere;
-  double radius = 0.5;                              // sphere, capsule
-  Eigen::Vector3d half_extents{0.5, 0.5, 0.5};      // box
-  double major_radius = 1.0, minor_radius = 0.25;   // torus
-  double half_length = 0.5;                         // capsule
+  double radius = 0.5;                             // sphere, capsule
+  Eigen::Vector3d half_extents{0.5, 0.5, 0.5};     // box
+  double major_radius = 1.0, minor_radius = 0.25;  // torus
+  double half_length = 0.5;                        // capsule
   Transform transform;
 };
 

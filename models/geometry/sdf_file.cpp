@@ -64,9 +64,10 @@ void write_f32_le(std::string& out, float v) {
 std::string read_whole_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in)
-    throw InputError(fmt::format("cannot open SDF file '{}': {}; check the path (relative "
-                                 "paths are taken from the working directory)",
-                                 path, std::strerror(errno)));
+    throw InputError(
+        fmt::format("cannot open SDF file '{}': {}; check the path (relative "
+                    "paths are taken from the working directory)",
+                    path, std::strerror(errno)));
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (in.bad())
     throw InputError(fmt::format("cannot read SDF file '{}'; check its permissions", path));
@@ -103,10 +104,10 @@ void validate_header(const std::string& path, const SdfHeader& h, std::size_t fi
   const std::uint64_t nodes = std::uint64_t(h.size[0]) * h.size[1] * h.size[2];
   const std::uint64_t expected = kHeaderBytes + 4 * nodes;
   if (file_bytes != expected)
-    throw InputError(fmt::format(
-        "SDF file '{}' has {} bytes but its header (size {} x {} x {}) needs {} bytes "
-        "(28 + 4 per node); the file is truncated or corrupt, regenerate it",
-        path, file_bytes, h.size[0], h.size[1], h.size[2], expected));
+    throw InputError(
+        fmt::format("SDF file '{}' has {} bytes but its header (size {} x {} x {}) needs {} bytes "
+                    "(28 + 4 per node); the file is truncated or corrupt, regenerate it",
+                    path, file_bytes, h.size[0], h.size[1], h.size[2], expected));
 }
 
 std::vector<double> read_values(const std::string& path, const std::string& bytes, long count) {
@@ -145,8 +146,7 @@ bool nearly_integer(double value, long& n) {
 SdfHeader header_for(const std::string& path, const SdfGrid& grid) {
   SdfHeader h;
   long r;
-  if (!(grid.cell_size > 0) || !nearly_integer(1.0 / grid.cell_size, r) || r <= 0 ||
-      r > INT32_MAX)
+  if (!(grid.cell_size > 0) || !nearly_integer(1.0 / grid.cell_size, r) || r <= 0 || r > INT32_MAX)
     throw InputError(fmt::format(
         "cannot write '{}': cell size {} m is not 1/r for an integer r, which the .sdf format "
         "needs; choose a cell_size like 0.01 or 1/64",
@@ -183,17 +183,19 @@ void write_atomically(const std::string& path, const std::string& bytes) {
     out.close();
     if (!out) {
       std::remove(tmp.c_str());
-      throw InputError(fmt::format("cannot write SDF file '{}' (via '{}'): {}; check that the "
-                                   "folder exists and is writable",
-                                   path, tmp, std::strerror(errno)));
+      throw InputError(
+          fmt::format("cannot write SDF file '{}' (via '{}'): {}; check that the "
+                      "folder exists and is writable",
+                      path, tmp, std::strerror(errno)));
     }
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string reason = std::strerror(errno);
     std::remove(tmp.c_str());
-    throw InputError(fmt::format("cannot move '{}' onto '{}': {}; check that the folder is "
-                                 "writable",
-                                 tmp, path, reason));
+    throw InputError(
+        fmt::format("cannot move '{}' onto '{}': {}; check that the folder is "
+                    "writable",
+                    tmp, path, reason));
   }
 }
 
@@ -201,8 +203,8 @@ void write_atomically(const std::string& path, const std::string& bytes) {
 
 SdfGrid load_sdf_file(const std::string& path, double scale, const Eigen::Vector3d& translation) {
   if (!(scale > 0) || !std::isfinite(scale))
-    throw InputError(fmt::format("scale for SDF file '{}' must be a positive number, got {}",
-                                 path, scale));
+    throw InputError(
+        fmt::format("scale for SDF file '{}' must be a positive number, got {}", path, scale));
   const std::string bytes = read_whole_file(path);
   const SdfHeader h = parse_header(path, bytes);
   validate_header(path, h, bytes.size());
@@ -219,16 +221,17 @@ SdfGrid load_sdf_file(const std::string& path, double scale, const Eigen::Vector
 
 void save_sdf_file(const std::string& path, const SdfGrid& grid) {
   if (grid.size.minCoeff() <= 0 || long(grid.phi.size()) != grid.node_count())
-    throw InputError(fmt::format("cannot write '{}': the grid has size {} x {} x {} but {} "
-                                 "values",
-                                 path, grid.size.x(), grid.size.y(), grid.size.z(),
-                                 grid.phi.size()));
-  const long non_finite = std::count_if(grid.phi.begin(), grid.phi.end(),
-                                        [](double v) { return !std::isfinite(v); });
+    throw InputError(
+        fmt::format("cannot write '{}': the grid has size {} x {} x {} but {} "
+                    "values",
+                    path, grid.size.x(), grid.size.y(), grid.size.z(), grid.phi.size()));
+  const long non_finite =
+      std::count_if(grid.phi.begin(), grid.phi.end(), [](double v) { return !std::isfinite(v); });
   if (non_finite > 0)
-    throw InputError(fmt::format("cannot write '{}': {} grid values are NaN or infinite; fill "
-                                 "every node before saving",
-                                 path, non_finite));
+    throw InputError(
+        fmt::format("cannot write '{}': {} grid values are NaN or infinite; fill "
+                    "every node before saving",
+                    path, non_finite));
   write_atomically(path, encode(header_for(path, grid), grid));
 }
 

@@ -1,0 +1,141 @@
+// Pieces shared by the interpreter's forward and adjoint executors: tensor binding,
+// the matrix-free Newmark system (a_m M + a_k R K R^T with fixed nodes eliminated) and
+// the band Laplacian of the displacement extension, both solved by Jacobi-PCG.
+#pragma once
+#include <vector>
+
+#include "graph/graph.h"
+#include "models/grid/sim_grid.h"
+#include "ops/elasticity.h"
+#include "ops/gather.h"
+#include "ops/newmark.h"
+#include "runtime/pcg.h"
+#include "runtime/tensor_store.h"
+
+namespace ssc {
+
+template <class Real>
+struct Binder {
+  TensorStore<Real>& store;
+  const OpNode& op;
+  int b;
+  const Real* in(const char* slot) const { return store.data(op.input(slot), b); }
+  Real* out(const char* slot) const { return store.data(op.output(slot), b); }
+  Real scalar(const char* slot, int k = 0) const { return in(slot)[k]; }
+  bool has_input(const char* slot) const {
+    for (const OpArg& a : op.inputs)
+      if (a.slot == slot) return true;
+    return false;
+  }
+};
+
+template <class Real>
+inline Mat3<Real> load_rotation(const Real* r, int cell) {
+  Mat3<Real> R;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) R.m[i][j] = r[9 * cell + 3 * i + j];
+  return R;
+}
+
+template <class Real>
+inline void add_rotation(Real* r, int cell, const Mat3<Real>& R) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r[9 * cell + 3 * i + j] += R.m[i][j];
+}
+
+// Per-corner K p for every cell (the matrix-free stiffness product).
+template <class Real>
+inline void stiffness_apply_cells(const SimGrid& g, const Real* rotation, const Real* weights, Real lambda, Real mu,
+                                  const Real* p, Real* corner_out) {
+  const Real h = Real(g.h);
+#pragma omp parallel for schedule(static)
+  for (int e = 0; e < g.cell_count; ++e) {
+    Vec3<Real> pc[8], y[8];
+    ops::load_cell_corners(p, g.cell_nodes.data(), e, pc);
+    ops::corotated_apply(load_rotation(rotation, e), weights + 8 * e, lambda, mu, h, pc, y);
+    for (int c = 0; c < 8; ++c) store3(corner_out, 8 * e + c, y[c]);
+  }
+}
+
+// Node sums of per-corner vectors: out[i] (+)= sum over the corners touching node i.
+template <class Real>
+inline void gather_corners_to_nodes(const SimGrid& g, const Real* corner, Real* out, bool accumulate) {
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < g.node_count; ++i) {
+    const Vec3<Real> s = ops::gather_corner_sum(corner, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+    if (accumulate)
+      add3(out, i, s);
+    else
+      store3(out, i, s);
+  }
+}
+
+// The SPD time-step system with fixed nodes eliminated (identity rows and columns).
+template <class Real>
+struct NewmarkSystem {
+  const SimGrid& g;
+  const std::vector<Real>& weights;
+  const Real* rotation;
+  Real lambda, mu;
+  const Real* mass;
+  const Real* fixed;
+  ops::NewmarkCoefficients<Real> c;
+
+  bool is_fixed(int i) const { return fixed[i] != Real(0); }
+
+  void apply(const Real* p, Real* q, std::vector<Real>& corner) const {
+    stiffness_apply_cells(g, rotation, weights.data(), lambda, mu, p, corner.data());
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < g.node_count; ++i) {
+      const Vec3<Real> kp = ops::gather_corner_sum(corner.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+      store3(q, i, is_fixed(i) ? load3(p, i) : ops::newmark_system_apply(c, mass[i], load3(p, i), kp));
+    }
+  }
+
+  // Solves A x = rhs (fixed entries of rhs ignored, x starts from its content).
+  PcgResult solve(const Real* rhs, Real* x, double tolerance, int max_iterations) const {
+    const Real h = Real(g.h);
+    const long n = 3L * g.node_count;
+    std::vector<Real> corner(24 * size_t(g.cell_count)), inv_diag(n), b(n);
+#pragma omp parallel for schedule(static)
+    for (int e = 0; e < g.cell_count; ++e) {
+      Vec3<Real> d[8];
+      ops::corotated_diagonal(load_rotation(rotation, e), weights.data() + 8 * e, lambda, mu, h, d);
+      for (int k = 0; k < 8; ++k) store3(corner.data(), 8 * e + k, d[k]);
+    }
+    for (int i = 0; i < g.node_count; ++i) {
+      const Vec3<Real> kd = ops::gather_corner_sum(corner.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+      const Vec3<Real> d = ops::newmark_system_apply(c, mass[i], make_vec3(Real(1), Real(1), Real(1)), kd);
+      for (int k = 0; k < 3; ++k) {
+        inv_diag[3 * i + k] = is_fixed(i) ? Real(1) : Real(1) / d[k];
+        b[3 * i + k] = is_fixed(i) ? Real(0) : rhs[3 * i + k];
+        if (is_fixed(i)) x[3 * i + k] = Real(0);
+      }
+    }
+    auto op = [&](const Real* p, Real* q) { apply(p, q, corner); };
+    return jacobi_pcg<Real>(n, op, inv_diag.data(), b.data(), x, tolerance, max_iterations);
+  }
+};
+
+// Solves the band Laplacian L x = rhs (3 components; x starts from its content).
+template <class Real>
+inline PcgResult solve_band_laplacian(const SimGrid& g, const Real* rhs, Real* x, double tolerance, int max_iterations) {
+  const long n = 3L * g.band_count;
+  std::vector<Real> inv_diag(n);
+  for (int i = 0; i < g.band_count; ++i)
+    for (int k = 0; k < 3; ++k) inv_diag[3 * i + k] = Real(1) / Real(g.band_degree[i]);
+  auto apply = [&](const Real* p, Real* q) {
+#pragma omp parallel for schedule(static)
+    for (int i = 0; i < g.band_count; ++i) {
+      Vec3<Real> s = Real(g.band_degree[i]) * load3(p, i);
+      for (int d = 0; d < 6; ++d) {
+        const int nb = g.band_neighbors[6 * i + d];
+        if (nb >= 0) s -= load3(p, nb);
+      }
+      store3(q, i, s);
+    }
+  };
+  return jacobi_pcg<Real>(n, apply, inv_diag.data(), rhs, x, tolerance, max_iterations);
+}
+
+}  // namespace ssc
