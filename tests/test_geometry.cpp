@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -38,8 +39,8 @@ class TempDir {
  public:
   TempDir() {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            fmt_name(std::string(info->test_suite_name()) + "_" + info->name());
+    path_ = fs::temp_directory_path() / ("ssc_geometry_" + std::to_string(::getpid()) + "_" +
+                                         info->test_suite_name() + "_" + info->name());
     fs::remove_all(path_);
     fs::create_directories(path_);
   }
@@ -48,9 +49,6 @@ class TempDir {
   const fs::path& path() const { return path_; }
 
  private:
-  static std::string fmt_name(const std::string& test) {
-    return "ssc_geometry_" + std::to_string(::getpid()) + "_" + test;
-  }
   fs::path path_;
 };
 

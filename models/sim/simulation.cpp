@@ -95,6 +95,7 @@ void Simulation::reset() {
       vol += grid_.node_volume[i];
     }
     com /= vol;
+    spin_center_ = com;
     double* u = st.data(graph_.u_prev, b);
     double* v = st.data(graph_.v_prev, b);
     const PhysicalParameters& p = params_[b];
@@ -143,6 +144,28 @@ void Simulation::step() {
     if (graph_.band_u >= 0) std::copy_n(st.data(graph_.band_u, b), 3 * grid_.band_count, st.data(graph_.band_guess, b));
     check_state(b);
   }
+}
+
+Simulation::State Simulation::state(int b) const {
+  State s;
+  const double *u = displacement(b), *v = velocity(b), *band = band_displacement(b);
+  s.u.assign(u, u + 3 * grid_.node_count);
+  s.v.assign(v, v + 3 * grid_.node_count);
+  if (band) s.band.assign(band, band + 3 * grid_.band_count);
+  return s;
+}
+
+void Simulation::set_state(int b, const State& s, int step) {
+  TensorStore<double>& st = interpreter_->store();
+  std::copy(s.u.begin(), s.u.end(), st.data(graph_.u_prev, b));
+  std::copy(s.v.begin(), s.v.end(), st.data(graph_.v_prev, b));
+  if (graph_.band_guess >= 0) {
+    if (s.band.empty())
+      std::fill_n(st.data(graph_.band_guess, b), 3 * grid_.band_count, 0.0);
+    else
+      std::copy(s.band.begin(), s.band.end(), st.data(graph_.band_guess, b));
+  }
+  steps_ = step;
 }
 
 const double* Simulation::displacement(int b) const { return interpreter_->store().data(graph_.u_prev, b); }

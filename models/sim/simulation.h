@@ -51,6 +51,16 @@ class Simulation {
   // Displacement of a rest-pose point (trilinear in its cell); InputError outside the body's cells.
   Eigen::Vector3d probe(int b, const Eigen::Vector3d& rest_point) const;
 
+  // The state of one batch item (what the adjoint stores per step), and its restoration.
+  struct State {
+    std::vector<double> u, v, band;
+  };
+  State state(int b) const;
+  void set_state(int b, const State& s, int step);
+  // The centre of mass the initial spin is taken about.
+  const Eigen::Vector3d& spin_center() const { return spin_center_; }
+
+  Interpreter<double>& interpreter() { return *interpreter_; }
   const RunReport& last_report() const { return interpreter_->report(); }
   const SimGrid& grid() const { return grid_; }
   const TimestepGraph& timestep_graph() const { return graph_; }
@@ -66,6 +76,7 @@ class Simulation {
   std::vector<char> fixed_;
   double dt_, theta_;
   int steps_ = 0;
+  Eigen::Vector3d spin_center_ = Eigen::Vector3d::Zero();
 };
 
 }  // namespace ssc

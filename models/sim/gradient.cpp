@@ -1,0 +1,146 @@
+// Adjoint driver over a whole simulation (see gradient.h).
+#include "models/sim/gradient.h"
+
+#include <cmath>
+#include <map>
+#include <stdexcept>
+
+namespace ssc {
+namespace {
+
+struct FrameSeed {
+  std::vector<double> u_bar, band_bar;
+};
+
+int choose_checkpoint_interval(const Simulation& sim, int steps, const GradientOptions& o) {
+  if (o.checkpoint_every > 0) return o.checkpoint_every;
+  const SimGrid& g = sim.grid();
+  const double bytes = double(steps + 1) * sim.batch() * 8.0 * (6.0 * g.node_count + 3.0 * g.band_count);
+  return bytes <= o.memory_budget_bytes ? 1 : std::max(1, int(std::ceil(std::sqrt(double(steps)))));
+}
+
+}  // namespace
+
+std::vector<CostGradient> evaluate_cost_gradient(Simulation& sim, const SurfaceConstraintCost& cost,
+                                                 const std::vector<ObservedFrame>& frames,
+                                                 const GradientOptions& options) {
+  const SimGrid& g = sim.grid();
+  const TimestepGraph& tg = sim.timestep_graph();
+  if (tg.band_u < 0) throw std::logic_error("evaluate_cost_gradient needs a simulation built with extension");
+  const int B = sim.batch();
+  int steps = 0;
+  std::multimap<int, size_t> frames_at;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    steps = std::max(steps, frames[f].step);
+    frames_at.emplace(frames[f].step, f);
+  }
+  const int K = choose_checkpoint_interval(sim, steps, options);
+
+  std::vector<CostGradient> results(B);
+  for (auto& r : results) r.frames.resize(frames.size());
+  // seeds[b][step] for the frames' cotangents
+  std::vector<std::map<int, FrameSeed>> seeds(B);
+  std::vector<std::map<int, Simulation::State>> stored(B);
+
+  auto take_frame_costs = [&](int t) {
+    auto range = frames_at.equal_range(t);
+    for (int b = 0; b < B; ++b)
+      for (auto it = range.first; it != range.second; ++it) {
+        const ObservedFrame& f = frames[it->second];
+        FrameSeed* seed = nullptr;
+        if (options.gradient) {
+          seed = &seeds[b][t];
+          seed->u_bar.resize(3 * size_t(g.node_count), 0.0);
+          seed->band_bar.resize(3 * size_t(g.band_count), 0.0);
+        }
+        const std::vector<double> zero_band(t == 0 ? 3 * size_t(g.band_count) : 0, 0.0);
+        const double* band = t == 0 ? zero_band.data() : sim.band_displacement(b);
+        const FrameCost fc = cost.evaluate(f.points, f.weight, sim.displacement(b), band,
+                                           seed ? seed->u_bar.data() : nullptr, seed ? seed->band_bar.data() : nullptr);
+        results[b].frames[it->second] = fc;
+        results[b].cost += fc.cost;
+      }
+  };
+
+  sim.reset();
+  for (int b = 0; b < B; ++b) stored[b][0] = sim.state(b);
+  take_frame_costs(0);
+  for (int t = 1; t <= steps; ++t) {
+    sim.step();
+    if (t % K == 0 || !options.gradient)
+      for (int b = 0; b < B && options.gradient; ++b) stored[b][t] = sim.state(b);
+    take_frame_costs(t);
+  }
+  if (!options.gradient) return results;
+
+  Interpreter<double>& in = sim.interpreter();
+  TensorStore<double>& adj = in.adjoint();
+  in.clear_adjoints(true);
+  const size_t n3 = 3 * size_t(g.node_count), b3 = 3 * size_t(g.band_count);
+  std::vector<std::vector<double>> u_bar(B, std::vector<double>(n3, 0.0)), v_bar(B, std::vector<double>(n3, 0.0));
+  // States of the current checkpoint segment, recomputed on entry.
+  std::vector<std::map<int, Simulation::State>> segment(B);
+  for (int t = steps; t >= 1; --t) {
+    const int base = ((t - 1) / K) * K;  // checkpoint at or below t-1
+    if (segment[0].find(t - 1) == segment[0].end()) {
+      for (int b = 0; b < B; ++b) {
+        segment[b].clear();
+        segment[b][base] = stored[b].at(base);
+        sim.set_state(b, stored[b].at(base), base);
+      }
+      for (int s = base + 1; s < t; ++s) {
+        sim.step();
+        for (int b = 0; b < B; ++b) segment[b][s] = sim.state(b);
+      }
+    }
+    for (int b = 0; b < B; ++b) sim.set_state(b, segment[b].at(t - 1), t - 1);
+    in.run();
+    in.clear_adjoints(false);
+    for (int b = 0; b < B; ++b) {
+      double* ub = adj.data(tg.u, b);
+      double* vb = adj.data(tg.v, b);
+      double* bb = adj.data(tg.band_u, b);
+      std::copy(u_bar[b].begin(), u_bar[b].end(), ub);
+      std::copy(v_bar[b].begin(), v_bar[b].end(), vb);
+      auto it = seeds[b].find(t);
+      if (it != seeds[b].end()) {
+        for (size_t i = 0; i < n3; ++i) ub[i] += it->second.u_bar[i];
+        for (size_t i = 0; i < b3; ++i) bb[i] += it->second.band_bar[i];
+      }
+    }
+    in.run_adjoint();
+    for (int b = 0; b < B; ++b) {
+      std::copy_n(adj.data(tg.u_prev, b), n3, u_bar[b].begin());
+      std::copy_n(adj.data(tg.v_prev, b), n3, v_bar[b].begin());
+    }
+  }
+
+  for (int b = 0; b < B; ++b) {
+    ParameterGradient& pg = results[b].gradient;
+    pg.youngs_modulus = adj.data(tg.youngs_modulus, b)[0];
+    pg.poisson_ratio = adj.data(tg.poisson_ratio, b)[0];
+    pg.density = adj.data(tg.density, b)[0];
+    pg.mass_damping = adj.data(tg.mass_damping, b)[0];
+    pg.stiffness_damping = adj.data(tg.stiffness_damping, b)[0];
+    for (int k = 0; k < 3; ++k) pg.gravity[k] = adj.data(tg.gravity, b)[k];
+    if (tg.ground_planes >= 0) {
+      const double* q = adj.data(tg.ground_planes, b);
+      for (size_t p = 0; p < sim.parameters(b).planes.size(); ++p) {
+        pg.plane_normal.emplace_back(q[6 * p], q[6 * p + 1], q[6 * p + 2]);
+        pg.plane_height.push_back(q[6 * p + 3]);
+      }
+    }
+    // v_0,i = v_lin + w x (x_i - c) on free nodes.
+    const std::vector<char>& fixed = sim.fixed_nodes();
+    for (int i = 0; i < g.node_count; ++i) {
+      if (fixed[i]) continue;
+      const Eigen::Vector3d vb(v_bar[b][3 * i], v_bar[b][3 * i + 1], v_bar[b][3 * i + 2]);
+      const Eigen::Vector3d r = Eigen::Vector3d(g.node_rest[3 * i], g.node_rest[3 * i + 1], g.node_rest[3 * i + 2]) - sim.spin_center();
+      pg.linear_velocity += vb;
+      pg.angular_velocity += r.cross(vb);
+    }
+  }
+  return results;
+}
+
+}  // namespace ssc

@@ -1,0 +1,50 @@
+// Cost and exact gradient of the sparse surface constraint over a whole simulation.
+//
+// Forward: every batch item is simulated from its initial state; the states (u, v, band)
+// are stored every checkpoint_every steps, and the cost's cotangents are taken at each
+// observed frame. Backward: for t = T..1 the step is recomputed from state t-1 (recomputed
+// from the last checkpoint when not stored), its ops' adjoints are run in reverse, and
+// the state cotangents flow to step t-1. Parameter gradients accumulate over all steps;
+// the initial velocity's gradient comes from the cotangent of v_0.
+#pragma once
+#include <Eigen/Core>
+#include <vector>
+
+#include "models/cost/surface_constraint.h"
+#include "models/sim/simulation.h"
+
+namespace ssc {
+
+struct ObservedFrame {
+  int step = 0;         // simulation step the frame shows
+  double weight = 1.0;
+  std::vector<Eigen::Vector3d> points;  // world, metres
+};
+
+struct ParameterGradient {
+  double youngs_modulus = 0, poisson_ratio = 0, density = 0, mass_damping = 0, stiffness_damping = 0;
+  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();
+  Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> plane_normal;  // d cost / d (unit normal), per plane
+  std::vector<double> plane_height;
+};
+
+struct CostGradient {
+  double cost = 0;
+  std::vector<FrameCost> frames;
+  ParameterGradient gradient;
+};
+
+struct GradientOptions {
+  bool gradient = true;
+  int checkpoint_every = 0;  // 0: every step if the states fit in memory_budget_bytes
+  double memory_budget_bytes = 2e9;
+};
+
+// One result per batch item. The simulation must have been built with extension = true.
+std::vector<CostGradient> evaluate_cost_gradient(Simulation& sim, const SurfaceConstraintCost& cost,
+                                                 const std::vector<ObservedFrame>& frames,
+                                                 const GradientOptions& options = {});
+
+}  // namespace ssc
