@@ -9,5 +9,8 @@ namespace ssc {
 using Command = std::function<int()>;
 
 Command register_simulate(CLI::App& app);
+Command register_observe(CLI::App& app);
+Command register_gradient(CLI::App& app);
+Command register_sweep(CLI::App& app);
 
 }  // namespace ssc

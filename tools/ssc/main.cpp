@@ -19,6 +19,9 @@ int main(int argc, char** argv) {
     commands.emplace_back(app.get_subcommands({})[before], std::move(run));
   };
   add(ssc::register_simulate);
+  add(ssc::register_observe);
+  add(ssc::register_gradient);
+  add(ssc::register_sweep);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,38 @@
+// The scene's "observation" section (synthetic depth cameras, noise, cost threshold),
+// rendering synthetic observations from a simulation, and turning an observation folder
+// (synthetic or recorded) into the observed frames of the cost.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "models/observation/camera.h"
+#include "models/observation/observation_set.h"
+#include "models/sim/gradient.h"
+#include "models/sim/scene.h"
+
+namespace ssc {
+
+struct ObservationSpec {
+  int every = 1;              // observe every n-th simulation step (frame 0 = rest state)
+  double noise = 0;           // metres, std along the viewing ray
+  std::uint64_t seed = 42;
+  double depth_scale = 1e-4;  // metres per PNG unit
+  double phi_max = 0;         // metres, cost threshold; 0: twice the cell size
+  std::vector<DepthCamera> cameras;
+};
+
+// Parses scene.extra["observation"]; InputError naming the scene and key.
+ObservationSpec parse_observation_spec(const Scene& scene);
+
+// Simulates the scene and renders every camera at every observed step.
+ObservationSet render_observations(const Scene& scene, const SimGrid& grid, const ObservationSpec& spec,
+                                   const std::function<void(int, int)>& progress = {});
+
+// Observed world points per frame, each mapped to the simulation step it shows;
+// InputError (naming dir) if the frame times do not fall on simulation steps or a frame
+// has no point at all.
+std::vector<ObservedFrame> observed_frames(const ObservationSet& set, double sim_dt, const std::string& dir);
+
+}  // namespace ssc

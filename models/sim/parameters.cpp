@@ -1,0 +1,181 @@
+// Named parameters (see parameters.h).
+#include "models/sim/parameters.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "models/io/errors.h"
+#include "models/sim/scene.h"
+
+namespace ssc {
+namespace {
+
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+const char* kAxes[3] = {"x", "y", "z"};
+
+std::string plane_prefix(size_t k) { return k == 0 ? "ground." : fmt::format("ground.planes[{}].", k); }
+
+// Splits a plane parameter name into plane index and field; false if not a plane name.
+bool parse_plane_name(const std::string& name, size_t plane_count, size_t* k, std::string* field) {
+  for (size_t i = 0; i < plane_count; ++i) {
+    const std::string prefix = plane_prefix(i);
+    if (name.rfind(prefix, 0) == 0 && (i > 0 || name.find("planes[") == std::string::npos)) {
+      *k = i;
+      *field = name.substr(prefix.size());
+      return *field == "height" || *field == "polar_deg" || *field == "azimuth_deg";
+    }
+  }
+  return false;
+}
+
+void plane_angles(const Eigen::Vector3d& n, double* polar, double* azimuth) {
+  const Eigen::Vector3d u = n.normalized();
+  *polar = std::acos(std::clamp(u.y(), -1.0, 1.0)) / kDegree;
+  *azimuth = std::atan2(u.z(), u.x()) / kDegree;
+}
+
+Eigen::Vector3d* vector_field(PhysicalParameters& p, const std::string& base) {
+  if (base == "gravity") return &p.gravity;
+  if (base == "initial.linear_velocity") return &p.linear_velocity;
+  if (base == "initial.angular_velocity") return &p.angular_velocity;
+  return nullptr;
+}
+
+double* scalar_field(PhysicalParameters& p, const std::string& name) {
+  if (name == "youngs_modulus") return &p.youngs_modulus;
+  if (name == "poisson_ratio") return &p.poisson_ratio;
+  if (name == "density") return &p.density;
+  if (name == "mass_damping") return &p.mass_damping;
+  if (name == "stiffness_damping") return &p.stiffness_damping;
+  return nullptr;
+}
+
+// "gravity.y" -> (&p.gravity, 1)
+Eigen::Vector3d* vector_component(PhysicalParameters& p, const std::string& name, int* axis) {
+  const size_t dot = name.rfind('.');
+  if (dot == std::string::npos) return nullptr;
+  const std::string base = name.substr(0, dot), comp = name.substr(dot + 1);
+  for (int a = 0; a < 3; ++a)
+    if (comp == kAxes[a]) {
+      *axis = a;
+      return vector_field(p, base);
+    }
+  return nullptr;
+}
+
+}  // namespace
+
+std::vector<std::string> all_parameter_names(const PhysicalParameters& p) {
+  std::vector<std::string> names = {"youngs_modulus", "poisson_ratio", "density", "mass_damping", "stiffness_damping"};
+  for (const char* base : {"gravity", "initial.linear_velocity", "initial.angular_velocity"})
+    for (const char* a : kAxes) names.push_back(fmt::format("{}.{}", base, a));
+  for (size_t k = 0; k < p.planes.size(); ++k)
+    for (const char* f : {"height", "polar_deg", "azimuth_deg"}) names.push_back(plane_prefix(k) + f);
+  return names;
+}
+
+std::vector<std::string> expand_parameter_names(const std::vector<std::string>& names, const PhysicalParameters& p) {
+  const std::vector<std::string> all = all_parameter_names(p);
+  std::vector<std::string> out;
+  for (const std::string& n : names) {
+    PhysicalParameters copy = p;
+    if (vector_field(copy, n)) {
+      for (const char* a : kAxes) out.push_back(n + "." + a);
+      continue;
+    }
+    if (std::find(all.begin(), all.end(), n) == all.end()) {
+      std::string list;
+      for (const std::string& a : all) list += (list.empty() ? "" : ", ") + a;
+      throw InputError(fmt::format("unknown parameter '{}'; the scene's parameters are: {} (and gravity, "
+                                   "initial.linear_velocity, initial.angular_velocity for all three components)",
+                                   n, list));
+    }
+    out.push_back(n);
+  }
+  return out;
+}
+
+double get_parameter(const PhysicalParameters& p, const std::string& name) {
+  PhysicalParameters& q = const_cast<PhysicalParameters&>(p);
+  if (double* s = scalar_field(q, name)) return *s;
+  int axis;
+  if (Eigen::Vector3d* v = vector_component(q, name, &axis)) return (*v)[axis];
+  size_t k;
+  std::string field;
+  if (parse_plane_name(name, p.planes.size(), &k, &field)) {
+    if (field == "height") return p.planes[k].height;
+    double polar, azimuth;
+    plane_angles(p.planes[k].normal, &polar, &azimuth);
+    return field == "polar_deg" ? polar : azimuth;
+  }
+  throw InputError(fmt::format("unknown parameter '{}'", name));
+}
+
+void set_parameter(PhysicalParameters& p, const std::string& name, double value) {
+  if (double* s = scalar_field(p, name)) {
+    *s = value;
+    return;
+  }
+  int axis;
+  if (Eigen::Vector3d* v = vector_component(p, name, &axis)) {
+    (*v)[axis] = value;
+    return;
+  }
+  size_t k;
+  std::string field;
+  if (parse_plane_name(name, p.planes.size(), &k, &field)) {
+    if (field == "height") {
+      p.planes[k].height = value;
+      return;
+    }
+    double polar, azimuth;
+    plane_angles(p.planes[k].normal, &polar, &azimuth);
+    (field == "polar_deg" ? polar : azimuth) = value;
+    p.planes[k].normal = normal_from_angles(polar, azimuth);
+    return;
+  }
+  throw InputError(fmt::format("unknown parameter '{}'", name));
+}
+
+double parameter_gradient(const ParameterGradient& g, const PhysicalParameters& p, const std::string& name) {
+  if (name == "youngs_modulus") return g.youngs_modulus;
+  if (name == "poisson_ratio") return g.poisson_ratio;
+  if (name == "density") return g.density;
+  if (name == "mass_damping") return g.mass_damping;
+  if (name == "stiffness_damping") return g.stiffness_damping;
+  PhysicalParameters q = p;
+  int axis;
+  if (Eigen::Vector3d* v = vector_component(q, name, &axis)) {
+    if (v == &q.gravity) return g.gravity[axis];
+    if (v == &q.linear_velocity) return g.linear_velocity[axis];
+    return g.angular_velocity[axis];
+  }
+  size_t k;
+  std::string field;
+  if (parse_plane_name(name, p.planes.size(), &k, &field)) {
+    if (field == "height") return g.plane_height[k];
+    double polar, azimuth;
+    plane_angles(p.planes[k].normal, &polar, &azimuth);
+    const double sp = std::sin(polar * kDegree), cp = std::cos(polar * kDegree);
+    const double sa = std::sin(azimuth * kDegree), ca = std::cos(azimuth * kDegree);
+    const Eigen::Vector3d dn = field == "polar_deg" ? Eigen::Vector3d(cp * ca, -sp, cp * sa) : Eigen::Vector3d(-sp * sa, 0, sp * ca);
+    return kDegree * g.plane_normal[k].dot(dn);
+  }
+  throw InputError(fmt::format("unknown parameter '{}'", name));
+}
+
+std::string parameter_unit(const std::string& name) {
+  if (name == "youngs_modulus") return "Pa";
+  if (name == "poisson_ratio") return "1";
+  if (name == "density") return "kg/m^3";
+  if (name == "mass_damping") return "1/s";
+  if (name == "stiffness_damping") return "s";
+  if (name.rfind("gravity", 0) == 0) return "m/s^2";
+  if (name.rfind("initial.linear_velocity", 0) == 0) return "m/s";
+  if (name.rfind("initial.angular_velocity", 0) == 0) return "rad/s";
+  if (name.find("height") != std::string::npos) return "m";
+  return "deg";
+}
+
+}  // namespace ssc

@@ -1,0 +1,23 @@
+// Loading of inverse problems (see problem.h).
+#include "models/sim/problem.h"
+
+#include "models/sim/body.h"
+#include "models/sim/observation_setup.h"
+
+namespace ssc {
+
+Problem load_problem(const std::string& scene_path, const std::vector<std::string>& overrides,
+                     const std::string& observation_dir, double phi_max_override) {
+  Problem p;
+  p.scene = load_scene(scene_path, overrides);
+  p.grid = build_body_grid(p.scene);
+  p.observations = read_observations(observation_dir);
+  p.frames = observed_frames(p.observations, p.scene.time.dt, observation_dir);
+  for (const ObservedFrame& f : p.frames) p.scene.time.steps = std::max(p.scene.time.steps, f.step);
+  p.phi_max = phi_max_override;
+  if (p.phi_max <= 0 && p.scene.extra.contains("observation")) p.phi_max = parse_observation_spec(p.scene).phi_max;
+  if (p.phi_max <= 0) p.phi_max = 2 * p.grid.h;
+  return p;
+}
+
+}  // namespace ssc

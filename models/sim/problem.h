@@ -1,0 +1,27 @@
+// An inverse problem as the commands load it: the scene (what is known), its grid, the
+// observation folder mapped onto simulation steps, and the cost threshold phi_max.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "models/grid/sim_grid.h"
+#include "models/observation/observation_set.h"
+#include "models/sim/gradient.h"
+#include "models/sim/scene.h"
+
+namespace ssc {
+
+struct Problem {
+  Scene scene;
+  SimGrid grid;
+  ObservationSet observations;
+  std::vector<ObservedFrame> frames;
+  double phi_max = 0;  // metres
+};
+
+// phi_max: the override if > 0, else the scene's observation.phi_max, else 2 cell sizes.
+// The scene's time.steps is raised if the observations reach further.
+Problem load_problem(const std::string& scene_path, const std::vector<std::string>& overrides,
+                     const std::string& observation_dir, double phi_max_override = 0);
+
+}  // namespace ssc

@@ -1,0 +1,360 @@
+// The whole-simulation gradient (models/sim/gradient.h, evaluate_cost_gradient) against
+// central finite differences of the implemented cost, per parameter (the test pyramid's
+// level v, engine-lessons.md lesson 16), plus checkpointing, batching and determinism.
+//
+// Scene: a sphere (radius 0.3 m, cells 0.1 m) spinning and translating onto a tilted
+// ground plane, with gravity, Rayleigh damping, corotation, soft-min contact and the
+// displacement extension (a band of 2 cells); 12 steps of 10 ms, solver tolerances 1e-12
+// (time step) and 1e-13 (extension). Observations: two 40x32 depth cameras
+// (make_look_at_camera, render_depth with 2 cm noise along the rays, fixed seeds) render
+// the deformed surface (DeformedSurface) of a reference run whose Young's modulus is 1.6x
+// larger; every measured pixel is unprojected to a world point (camera unproject), one
+// frame per step. The cost is the sparse surface constraint (SurfaceConstraintCost,
+// phi_max 0.1 m); thanks to the noise part of the points match cells with band corners,
+// so the extension's adjoint is on the path.
+//
+// Every probe resets the simulation (evaluate_cost_gradient starts from reset()), so no
+// state leaks between probes. FD steps are per parameter, in the middle of the plateau
+// of a sweep over 1e-3..1e-9 (absolute; relative for E): larger steps show truncation
+// (contact is sharp: softmin alpha = 100/m), smaller ones round-off and solver noise. At
+// these steps the measured relative errors are 1e-11..5e-9 (the table is printed).
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "models/cost/surface_constraint.h"
+#include "models/observation/camera.h"
+#include "models/observation/depth_render.h"
+#include "models/sim/body.h"
+#include "models/sim/deformed_surface.h"
+#include "models/sim/gradient.h"
+#include "models/sim/scene.h"
+#include "models/sim/simulation.h"
+
+namespace ssc {
+namespace {
+
+using json = nlohmann::json;
+using Vec3 = Eigen::Vector3d;
+
+constexpr int kSteps = 12;
+constexpr double kPhiMax = 0.1;  // m
+// Depth noise along the rays (m): it puts part of the observed points outside the body's
+// active cells, in cells with extension (band) corners, so that the extension's adjoint
+// is exercised too.
+constexpr double kNoise = 0.02;
+
+json pipeline_scene_json() {
+  json j;
+  j["object"] = {{"primitive", "sphere"}, {"radius", 0.3}, {"position", {0.05, 0.345, -0.03}}};
+  j["grid"] = {{"cell_size", 0.1}, {"band_width", 2}};
+  j["material"] = {{"youngs_modulus", 2e4}, {"poisson_ratio", 0.3}, {"density", 100},
+                   {"mass_damping", 0.2},   {"stiffness_damping", 0.01}};
+  j["gravity"] = {0, -9.81, 0};
+  j["initial"] = {{"linear_velocity", {0.4, -1.2, 0.25}}, {"angular_velocity", {1.5, -2.0, 3.0}}};
+  j["ground"] = {{"height", 0.0}, {"normal", {0.15, 1.0, -0.1}}, {"stiffness", 3e5}, {"softmin_alpha", 100}};
+  j["time"] = {{"dt", 0.01}, {"steps", kSteps}, {"theta", 0.6}};
+  j["solver"] = {{"tolerance", 1e-12}, {"max_iterations", 5000}, {"extension_tolerance", 1e-13}};
+  return j;
+}
+
+// A clamped bar (no ground, no contact op in the graph): the Dirichlet (fixed-node) paths
+// of the time-step solve and of the initial velocity.
+json clamped_bar_json() {
+  json j;
+  j["object"] = {{"primitive", "box"}, {"half_extents", {0.35, 0.08, 0.12}}, {"position", {0.02, 0.5, 0.01}}};
+  j["grid"] = {{"cell_size", 0.1}, {"band_width", 2}};
+  j["material"] = {{"youngs_modulus", 3e4}, {"poisson_ratio", 0.35}, {"density", 150},
+                   {"mass_damping", 0.3},   {"stiffness_damping", 0.015}};
+  j["gravity"] = {0.5, -9.81, 0.3};
+  j["initial"] = {{"linear_velocity", {0.0, 0.3, -0.2}}, {"angular_velocity", {0.4, 0.0, 0.8}}};
+  j["dirichlet"] = {{{"min", {-1.0, 0.0, -1.0}}, {"max", {-0.3, 1.0, 1.0}}}};
+  j["time"] = {{"dt", 0.01}, {"steps", kSteps}, {"theta", 0.6}};
+  j["solver"] = {{"tolerance", 1e-12}, {"max_iterations", 5000}, {"extension_tolerance", 1e-13}};
+  return j;
+}
+
+// Scene, grid, observations and cost, built once per scene.
+struct Pipeline {
+  Scene scene;
+  SimGrid grid;
+  std::vector<ObservedFrame> frames;
+  std::unique_ptr<SurfaceConstraintCost> cost;
+  PhysicalParameters params;
+  size_t points = 0;
+};
+
+// Observations: a reference run whose Young's modulus is 1.6x larger, seen by two cameras
+// looking at `target`.
+std::unique_ptr<Pipeline> build_pipeline(const json& config, const Vec3& target, const Vec3& eye0, const Vec3& eye1) {
+  auto q = std::make_unique<Pipeline>();
+  q->scene = parse_scene(config, "gradient_pipeline_test.json");
+  q->grid = build_body_grid(q->scene);
+  q->params = PhysicalParameters::from_scene(q->scene);
+  PhysicalParameters ref = q->params;
+  ref.youngs_modulus *= 1.6;
+  Simulation sim(q->scene, q->grid, 1, false);
+  sim.set_parameters(0, ref);
+  const DeformedSurface surface(q->grid);
+  const Vec3 up(0, 1, 0);
+  const std::vector<DepthCamera> cams = {make_look_at_camera("cam0", 40, 32, 35.0, eye0, target, up),
+                                         make_look_at_camera("cam1", 40, 32, 35.0, eye1, target, up)};
+  for (int t = 1; t <= kSteps; ++t) {
+    sim.step();
+    const TriangleBvh bvh(surface.positions(sim.displacement(0)), surface.triangles());
+    ObservedFrame f;
+    f.step = t;
+    for (size_t c = 0; c < cams.size(); ++c) {
+      const DepthImage img = render_depth(cams[c], bvh, kNoise, mix_seed(7, t, c));
+      for (int v = 0; v < img.height; ++v)
+        for (int u = 0; u < img.width; ++u)
+          if (img.at(u, v) > 0) f.points.push_back(unproject(cams[c], u, v, img.at(u, v)));
+    }
+    q->points += f.points.size();
+    q->frames.push_back(std::move(f));
+  }
+  q->cost = std::make_unique<SurfaceConstraintCost>(q->grid, kPhiMax);
+  return q;
+}
+
+const Pipeline& pipeline() {
+  static const std::unique_ptr<Pipeline> p =
+      build_pipeline(pipeline_scene_json(), Vec3(0.05, 0.3, -0.03), Vec3(1.3, 1.0, 1.5), Vec3(-1.7, 0.7, -0.6));
+  return *p;
+}
+
+const Pipeline& clamped_bar() {
+  static const std::unique_ptr<Pipeline> p =
+      build_pipeline(clamped_bar_json(), Vec3(0.02, 0.48, 0.01), Vec3(0.8, 1.2, 1.6), Vec3(0.5, 0.1, -1.7));
+  return *p;
+}
+
+double cost_of(const Pipeline& pl, Simulation& sim, const PhysicalParameters& p) {
+  sim.set_parameters(0, p);
+  GradientOptions o;
+  o.gradient = false;
+  return evaluate_cost_gradient(sim, *pl.cost, pl.frames, o)[0].cost;
+}
+
+// Tangents of the unit sphere at n.
+void tangents(const Vec3& n, Vec3* t1, Vec3* t2) {
+  *t1 = n.cross(Vec3(0, 0, 1)).normalized();
+  *t2 = n.cross(*t1).normalized();
+}
+
+// A scalar parameter: how to perturb it, what the adjoint says about it, its FD step.
+struct Probe {
+  std::string name;
+  double step;
+  std::function<void(PhysicalParameters&, double)> perturb;
+  std::function<double(const ParameterGradient&)> adjoint;
+};
+
+std::vector<Probe> probes(const PhysicalParameters& p0) {
+  std::vector<Probe> out;
+  out.push_back({"youngs_modulus", 0.2, [](PhysicalParameters& p, double e) { p.youngs_modulus += e; },
+                 [](const ParameterGradient& g) { return g.youngs_modulus; }});
+  out.push_back({"poisson_ratio", 1e-5, [](PhysicalParameters& p, double e) { p.poisson_ratio += e; },
+                 [](const ParameterGradient& g) { return g.poisson_ratio; }});
+  out.push_back({"density", 1e-3, [](PhysicalParameters& p, double e) { p.density += e; },
+                 [](const ParameterGradient& g) { return g.density; }});
+  out.push_back({"mass_damping", 1e-4, [](PhysicalParameters& p, double e) { p.mass_damping += e; },
+                 [](const ParameterGradient& g) { return g.mass_damping; }});
+  out.push_back({"stiffness_damping", 1e-6, [](PhysicalParameters& p, double e) { p.stiffness_damping += e; },
+                 [](const ParameterGradient& g) { return g.stiffness_damping; }});
+  const char* axes[3] = {"x", "y", "z"};
+  for (int k = 0; k < 3; ++k) {
+    out.push_back({std::string("gravity.") + axes[k], 1e-4, [k](PhysicalParameters& p, double e) { p.gravity[k] += e; },
+                   [k](const ParameterGradient& g) { return g.gravity[k]; }});
+  }
+  for (int k = 0; k < 3; ++k) {
+    out.push_back({std::string("initial.linear_velocity.") + axes[k], 1e-5,
+                   [k](PhysicalParameters& p, double e) { p.linear_velocity[k] += e; },
+                   [k](const ParameterGradient& g) { return g.linear_velocity[k]; }});
+  }
+  for (int k = 0; k < 3; ++k) {
+    out.push_back({std::string("initial.angular_velocity.") + axes[k], k == 1 ? 1e-5 : 1e-4,
+                   [k](PhysicalParameters& p, double e) { p.angular_velocity[k] += e; },
+                   [k](const ParameterGradient& g) { return g.angular_velocity[k]; }});
+  }
+  if (p0.planes.empty()) return out;
+  out.push_back({"ground.height", 1e-6, [](PhysicalParameters& p, double e) { p.planes[0].height += e; },
+                 [](const ParameterGradient& g) { return g.plane_height[0]; }});
+  Vec3 t[2];
+  tangents(p0.planes[0].normal.normalized(), &t[0], &t[1]);
+  for (int k = 0; k < 2; ++k) {
+    const Vec3 tk = t[k];
+    // n(e) = normalize(n + e t): dn/de = t at e = 0, so dJ/de = (dJ/dn) . t.
+    out.push_back({std::string("ground.normal.tangent") + std::to_string(k + 1), 1e-5,
+                   [tk](PhysicalParameters& p, double e) { p.planes[0].normal = (p.planes[0].normal.normalized() + e * tk).normalized(); },
+                   [tk](const ParameterGradient& g) { return g.plane_normal[0].dot(tk); }});
+  }
+  return out;
+}
+
+std::vector<double> flatten(const CostGradient& r) {
+  const ParameterGradient& g = r.gradient;
+  std::vector<double> v = {r.cost, g.youngs_modulus, g.poisson_ratio, g.density, g.mass_damping, g.stiffness_damping};
+  for (int k = 0; k < 3; ++k) v.push_back(g.gravity[k]);
+  for (int k = 0; k < 3; ++k) v.push_back(g.linear_velocity[k]);
+  for (int k = 0; k < 3; ++k) v.push_back(g.angular_velocity[k]);
+  for (const Vec3& n : g.plane_normal)
+    for (int k = 0; k < 3; ++k) v.push_back(n[k]);
+  for (double h : g.plane_height) v.push_back(h);
+  return v;
+}
+
+bool bitwise_equal(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// ------------------------------------------------------------------------------------------
+
+TEST(GradientPipeline, SceneHasCollisionsRotationAndObservations) {
+  const Pipeline& pl = pipeline();
+  Simulation sim(pl.scene, pl.grid, 1, true);
+  double min_dist = 1e9;
+  const Vec3 n = pl.params.planes[0].normal.normalized();
+  for (int t = 1; t <= kSteps; ++t) {
+    sim.step();
+    for (const CollisionPoint& cp : pl.grid.collision_points) {
+      Vec3 x = Vec3::Zero();
+      for (int s = 0; s < 2; ++s) {
+        const int a = s ? cp.node_b : cp.node_a;
+        const double w = s ? cp.t : 1 - cp.t;
+        for (int k = 0; k < 3; ++k) x[k] += w * (pl.grid.node_rest[3 * a + k] + sim.displacement(0)[3 * a + k]);
+      }
+      min_dist = std::min(min_dist, n.dot(x) - pl.params.planes[0].height);
+    }
+  }
+  size_t matched = 0;
+  const CostGradient r = evaluate_cost_gradient(sim, *pl.cost, pl.frames, {})[0];
+  for (const FrameCost& f : r.frames) matched += f.matched;
+  // The last frame's cotangents on active and on band nodes (the state is the last step's).
+  std::vector<double> u_bar(3 * size_t(pl.grid.node_count), 0.0), band_bar(3 * size_t(pl.grid.band_count), 0.0);
+  pl.cost->evaluate(pl.frames.back().points, 1.0, sim.displacement(0), sim.band_displacement(0), u_bar.data(),
+                    band_bar.data());
+  double nu = 0, nb = 0;
+  for (double x : u_bar) nu += x * x;
+  for (double x : band_bar) nb += x * x;
+  std::printf("pipeline scene: %d cells, %d nodes, %d band nodes, %zu collision points, %zu observed points in %zu "
+              "frames (%zu matched), deepest penetration %.4f m, cost %.6e, last frame |u_bar| %.3e |band_bar| %.3e\n",
+              pl.grid.cell_count, pl.grid.node_count, pl.grid.band_count, pl.grid.collision_points.size(), pl.points,
+              pl.frames.size(), matched, -min_dist, r.cost, std::sqrt(nu), std::sqrt(nb));
+  EXPECT_GT(std::sqrt(nb), 0.01 * std::sqrt(nu)) << "the observations must reach cells with band corners";
+  EXPECT_LT(min_dist, -0.005) << "the sphere must press into the ground";
+  EXPECT_GT(pl.points, size_t(1000));
+  EXPECT_GT(matched, pl.points * 9 / 10);
+  EXPECT_GT(r.cost, 0.0);
+}
+
+// Adjoint vs central differences for every parameter of the scene; prints the table.
+void check_against_finite_differences(const Pipeline& pl, const char* label) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Simulation sim(pl.scene, pl.grid, 1, true);
+  sim.set_parameters(0, pl.params);
+  const CostGradient r = evaluate_cost_gradient(sim, *pl.cost, pl.frames, {})[0];
+  std::printf("%s: cost %.10e, gradient in %.2f s\n", label, r.cost, seconds_since(t0));
+  std::printf("%-34s %12s %20s %20s %10s\n", "parameter", "FD step", "adjoint", "central FD", "rel error");
+  double worst = 0;
+  for (const Probe& pr : probes(pl.params)) {
+    PhysicalParameters pp = pl.params, pm = pl.params;
+    pr.perturb(pp, pr.step);
+    pr.perturb(pm, -pr.step);
+    const double fd = (cost_of(pl, sim, pp) - cost_of(pl, sim, pm)) / (2 * pr.step);
+    const double adj = pr.adjoint(r.gradient);
+    const double rel = std::abs(fd - adj) / std::max(std::abs(adj), 1e-300);
+    worst = std::max(worst, rel);
+    std::printf("%-34s %12.1e %20.12e %20.12e %10.2e\n", pr.name.c_str(), pr.step, adj, fd, rel);
+    ::testing::Test::RecordProperty((std::string(label) + "_rel_error_" + pr.name).c_str(), std::to_string(rel));
+    EXPECT_LE(rel, 1e-5) << label << " " << pr.name << ": adjoint " << adj << ", FD " << fd;
+  }
+  std::printf("%s: worst relative error %.2e; %.2f s in all\n", label, worst, seconds_since(t0));
+}
+
+TEST(GradientPipeline, AdjointMatchesCentralDifferencesPerParameter) {
+  check_against_finite_differences(pipeline(), "sphere on tilted ground");
+}
+
+TEST(GradientPipeline, ClampedBarAdjointMatchesCentralDifferences) {
+  const Pipeline& pl = clamped_bar();
+  Simulation sim(pl.scene, pl.grid, 1, true);
+  int fixed = 0;
+  for (char f : sim.fixed_nodes()) fixed += f;
+  std::printf("clamped bar: %d cells, %d nodes (%d fixed), %d band nodes, %zu observed points\n", pl.grid.cell_count,
+              pl.grid.node_count, fixed, pl.grid.band_count, pl.points);
+  ASSERT_GT(fixed, 0);
+  ASSERT_LT(fixed, pl.grid.node_count / 2);
+  check_against_finite_differences(pl, "clamped bar");
+}
+
+TEST(GradientPipeline, CheckpointingGivesTheSameGradient) {
+  const Pipeline& pl = pipeline();
+  Simulation sim(pl.scene, pl.grid, 1, true);
+  GradientOptions every, third;
+  every.checkpoint_every = 1;
+  third.checkpoint_every = 3;
+  const std::vector<double> a = flatten(evaluate_cost_gradient(sim, *pl.cost, pl.frames, every)[0]);
+  const std::vector<double> b = flatten(evaluate_cost_gradient(sim, *pl.cost, pl.frames, third)[0]);
+  double worst = 0;
+  for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, std::abs(a[i] - b[i]) / std::max(std::abs(a[i]), 1e-300));
+  std::printf("checkpoint_every 3 vs every step stored: worst relative difference %.2e (bitwise equal: %s)\n", worst,
+              bitwise_equal(a, b) ? "yes" : "no");
+  EXPECT_LE(worst, 1e-12);
+}
+
+TEST(GradientPipeline, BatchOfTwoEqualsTwoSingleRunsBitwise) {
+  const Pipeline& pl = pipeline();
+  PhysicalParameters p0 = pl.params, p1 = pl.params;
+  p1.youngs_modulus = 3.1e4;
+  p1.poisson_ratio = 0.38;
+  p1.density = 140;
+  p1.mass_damping = 0.05;
+  p1.stiffness_damping = 0.02;
+  p1.gravity = Vec3(0.3, -9.0, -0.2);
+  p1.linear_velocity = Vec3(-0.2, -1.0, 0.5);
+  p1.angular_velocity = Vec3(-1.0, 2.5, 0.5);
+  p1.planes[0].height = -0.01;
+  p1.planes[0].normal = Vec3(-0.1, 1.0, 0.12).normalized();
+  Simulation batch(pl.scene, pl.grid, 2, true);
+  batch.set_parameters(0, p0);
+  batch.set_parameters(1, p1);
+  const std::vector<CostGradient> rb = evaluate_cost_gradient(batch, *pl.cost, pl.frames, {});
+  ASSERT_EQ(rb.size(), 2u);
+  Simulation single(pl.scene, pl.grid, 1, true);
+  single.set_parameters(0, p0);
+  const std::vector<double> s0 = flatten(evaluate_cost_gradient(single, *pl.cost, pl.frames, {})[0]);
+  single.set_parameters(0, p1);
+  const std::vector<double> s1 = flatten(evaluate_cost_gradient(single, *pl.cost, pl.frames, {})[0]);
+  EXPECT_TRUE(bitwise_equal(flatten(rb[0]), s0)) << "batch item 0";
+  EXPECT_TRUE(bitwise_equal(flatten(rb[1]), s1)) << "batch item 1";
+  EXPECT_FALSE(bitwise_equal(s0, s1)) << "the two parameter sets must differ";
+}
+
+TEST(GradientPipeline, RepeatedRunsAreBitwiseIdentical) {
+  const Pipeline& pl = pipeline();
+  Simulation sim(pl.scene, pl.grid, 1, true);
+  const std::vector<double> a = flatten(evaluate_cost_gradient(sim, *pl.cost, pl.frames, {})[0]);
+  const std::vector<double> b = flatten(evaluate_cost_gradient(sim, *pl.cost, pl.frames, {})[0]);
+  Simulation fresh(pl.scene, pl.grid, 1, true);
+  const std::vector<double> c = flatten(evaluate_cost_gradient(fresh, *pl.cost, pl.frames, {})[0]);
+  EXPECT_TRUE(bitwise_equal(a, b)) << "same simulation object, run twice";
+  EXPECT_TRUE(bitwise_equal(a, c)) << "a fresh simulation object";
+}
+
+}  // namespace
+}  // namespace ssc

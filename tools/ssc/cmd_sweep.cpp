@@ -1,0 +1,103 @@
+// `ssc sweep SCENE --observations DIR --param NAME=LO:HI:N [--log]`: cost and gradient
+// along one parameter, as CSV and an SVG plot (the paper's figures 6 and 13).
+#include <fmt/format.h>
+
+#include <cmath>
+#include <fstream>
+
+#include "models/io/errors.h"
+#include "models/io/output_dir.h"
+#include "models/io/svg_plot.h"
+#include "models/sim/parameters.h"
+#include "models/sim/problem.h"
+#include "tools/ssc/commands.h"
+#include "tools/ssc/progress.h"
+
+namespace ssc {
+namespace {
+
+struct SweepRange {
+  std::string name;
+  double lo = 0, hi = 0;
+  int count = 0;
+};
+
+SweepRange parse_range(const std::string& text) {
+  SweepRange r;
+  const size_t eq = text.find('=');
+  char c1 = 0, c2 = 0;
+  if (eq != std::string::npos) {
+    r.name = text.substr(0, eq);
+    if (std::sscanf(text.c_str() + eq + 1, "%lf%c%lf%c%d", &r.lo, &c1, &r.hi, &c2, &r.count) == 5 && c1 == ':' && c2 == ':' &&
+        r.count >= 2 && r.count <= 10000)
+      return r;
+  }
+  throw InputError(fmt::format("--param {}: expected NAME=LO:HI:N with N >= 2, e.g. youngs_modulus=1250:20000:31", text));
+}
+
+}  // namespace
+
+Command register_sweep(CLI::App& app) {
+  struct Options {
+    std::string scene, observations, param, out;
+    std::vector<std::string> overrides;
+    bool log = false;
+    double phi_max = 0, truth = std::nan("");
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* sub = app.add_subcommand("sweep", "Cost and gradient along one parameter (CSV and SVG plot)");
+  sub->add_option("scene", o->scene, "Scene file")->required();
+  sub->add_option("--observations", o->observations, "Observation folder")->required();
+  sub->add_option("--param", o->param, "NAME=LO:HI:N")->required();
+  sub->add_option("--out", o->out, "Output folder (sweep.csv, sweep.svg)")->required();
+  sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
+  sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
+  sub->add_option("--truth", o->truth, "Value to mark in the plot (e.g. the ground truth)");
+  sub->add_flag("--log", o->log, "Sample logarithmically");
+  return [o] {
+    SweepRange range = parse_range(o->param);
+    if (o->log && (range.lo <= 0 || range.hi <= 0)) throw InputError("--log needs positive LO and HI");
+    const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max);
+    Simulation sim(problem.scene, problem.grid, 1, true);
+    const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
+    const PhysicalParameters base = sim.parameters(0);
+    range.name = expand_parameter_names({range.name}, base).at(0);
+    OutputDir out(o->out);
+    std::vector<double> xs, costs, grads;
+    Progress progress("sweep", range.count);
+    std::string csv = fmt::format("{},cost,gradient,matched_points,observed_points\n", range.name);
+    for (int i = 0; i < range.count; ++i) {
+      const double t = double(i) / (range.count - 1);
+      const double x = o->log ? range.lo * std::pow(range.hi / range.lo, t) : range.lo + t * (range.hi - range.lo);
+      PhysicalParameters p = base;
+      set_parameter(p, range.name, x);
+      sim.set_parameters(0, p);
+      const CostGradient r = evaluate_cost_gradient(sim, cost, problem.frames)[0];
+      int points = 0, matched = 0;
+      for (const FrameCost& f : r.frames) points += f.points, matched += f.matched;
+      xs.push_back(x);
+      costs.push_back(r.cost);
+      grads.push_back(parameter_gradient(r.gradient, p, range.name));
+      csv += fmt::format("{:.10g},{:.10g},{:.10g},{},{}\n", x, r.cost, grads.back(), matched, points);
+      progress.update(i + 1, fmt::format("{} = {:.4g}", range.name, x));
+    }
+    progress.finish();
+    {
+      std::ofstream f(out.file("sweep.csv"));
+      f << csv;
+      if (!f) throw InputError(o->out + ": cannot write sweep.csv");
+    }
+    const std::string unit = parameter_unit(range.name);
+    PlotPanel cost_panel{"cost J_SSC", fmt::format("{} [{}]", range.name, unit), "cost", o->log, false, false, {}, {}};
+    PlotPanel grad_panel{"dJ/d" + range.name, fmt::format("{} [{}]", range.name, unit), "gradient", o->log, false, true, {}, {}};
+    if (std::isfinite(o->truth)) cost_panel.vertical_lines = grad_panel.vertical_lines = {o->truth};
+    cost_panel.series.push_back({"", xs, costs, plot_color(0), 1.5, true});
+    grad_panel.series.push_back({"", xs, grads, plot_color(1), 1.5, true});
+    write_svg_plot(out.file("sweep.svg"), {cost_panel, grad_panel});
+    out.commit();
+    std::printf("wrote %s/sweep.csv and %s/sweep.svg (%d samples)\n", o->out.c_str(), o->out.c_str(), range.count);
+    return 0;
+  };
+}
+
+}  // namespace ssc
