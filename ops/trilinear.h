@@ -98,7 +98,7 @@ SSC_HD inline void adj_inverse_then_interpolate(const Vec3<Real>* X, Vec3<Real> 
 //   cost = 1/2 phi_max^2 (1 - exp(-phi^2 / phi_max^2)).
 template <class Real>
 SSC_HD inline Real surface_point_cost(Real phi, Real phi_max) {
-  return Real(0.5) * phi_max * phi_max * (Real(1) - exp(-(phi * phi) / (phi_max * phi_max)));
+  return Real(-0.5) * phi_max * phi_max * expm1(-(phi * phi) / (phi_max * phi_max));
 }
 
 template <class Real>

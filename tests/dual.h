@@ -68,6 +68,11 @@ struct Dual {
     const T e = exp(a.v);
     return {e, e * a.d};
   }
+  friend Dual expm1(const Dual& a) {
+    using std::exp;
+    using std::expm1;
+    return {expm1(a.v), exp(a.v) * a.d};
+  }
   friend Dual log(const Dual& a) {
     using std::log;
     return {log(a.v), a.d / a.v};

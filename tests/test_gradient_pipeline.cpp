@@ -19,6 +19,7 @@
 // (contact is sharp: softmin alpha = 100/m), smaller ones round-off and solver noise. At
 // these steps the measured relative errors are 1e-11..5e-9 (the table is printed).
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -262,8 +263,24 @@ TEST(GradientPipeline, SceneHasCollisionsRotationAndObservations) {
   EXPECT_GT(r.cost, 0.0);
 }
 
+// Runs a scope with a given OpenMP thread count and restores the previous one. The FD
+// probes (about 70 forward runs) run on one thread: the engine's many small parallel
+// regions (several per CG iteration) slow down 10-80x when the cores are shared with
+// other processes (measured: this file 4 s with OMP_NUM_THREADS=1, 36 s with an active
+// wait policy, up to 185 s at load 9 on 2 cores). Threading is what the checkpoint,
+// batch and determinism tests exercise; they keep the default thread count.
+class ScopedOmpThreads {
+ public:
+  explicit ScopedOmpThreads(int n) : saved_(omp_get_max_threads()) { omp_set_num_threads(n); }
+  ~ScopedOmpThreads() { omp_set_num_threads(saved_); }
+
+ private:
+  int saved_;
+};
+
 // Adjoint vs central differences for every parameter of the scene; prints the table.
 void check_against_finite_differences(const Pipeline& pl, const char* label) {
+  const ScopedOmpThreads single_thread(1);
   const auto t0 = std::chrono::steady_clock::now();
   Simulation sim(pl.scene, pl.grid, 1, true);
   sim.set_parameters(0, pl.params);

@@ -611,6 +611,31 @@ TEST(OpAdjointPolar, CorotationChainDeformationGradientThenPolar) {
   run_cases("corotation (F(u) then polar)", kSeeds, make_corotation_chain, t);
 }
 
+TEST(OpAdjointPolar, DegenerateCellIsConstantIdentity) {
+  // det F < kPolarMinDet (inverted or flattened cell): R = I, a constant, so both the
+  // Dual forward and the adjoint give zero.
+  Rng rng(77);
+  for (double flatten : {0.0, -0.3}) {
+    Mat3<double> F = random_deformation_gradient(rng, 0.1);
+    for (int i = 0; i < 3; ++i) F.m[i][2] *= flatten;  // squash (0) or invert (< 0) the third column
+    Mat3<D> FD, RD;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) FD.m[i][j] = D(F.m[i][j], uni(rng, -1, 1));
+    EXPECT_EQ(ops::polar_rotation(FD, RD), ops::kPolarDegenerate);
+    Mat3<double> R, Rb, Fb = zero33<double>();
+    const int status = ops::polar_rotation(F, R);
+    EXPECT_EQ(status, ops::kPolarDegenerate);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        EXPECT_EQ(RD.m[i][j].v, i == j ? 1.0 : 0.0);
+        EXPECT_EQ(RD.m[i][j].d, 0.0);
+        Rb.m[i][j] = uni(rng, -1, 1);
+      }
+    ops::adj_polar_rotation(F, R, status, Rb, Fb);
+    EXPECT_EQ(frobenius_dot(Fb, Fb), 0.0);
+  }
+}
+
 TEST(OpAdjointContact, OnePlaneInContact) {
   run_cases("contact_force 1 plane in contact", kSeeds,
             [](Rng& rng, int) { return make_contact(rng, 1, {uni(rng, -0.02, 0.005)}); });

@@ -12,5 +12,7 @@ Command register_simulate(CLI::App& app);
 Command register_observe(CLI::App& app);
 Command register_gradient(CLI::App& app);
 Command register_sweep(CLI::App& app);
+Command register_reconstruct(CLI::App& app);
+Command register_kernels(CLI::App& app);
 
 }  // namespace ssc

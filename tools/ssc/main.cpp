@@ -22,6 +22,8 @@ int main(int argc, char** argv) {
   add(ssc::register_observe);
   add(ssc::register_gradient);
   add(ssc::register_sweep);
+  add(ssc::register_reconstruct);
+  add(ssc::register_kernels);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,63 @@
+// Per-op code fragments for the CUDA generator: for every op kind of graph/, the body
+// of its forward (and, separately, its adjoint) for one index of its domain, written as
+// calls into the op headers of ops/ (the same functions the CPU interpreter loops), plus
+// the parameters the fragment binds. Opaque ops (NewmarkSolve, ExtensionSolve) are split
+// into solver stages: element apply over cells, node gathers, ordered dot-product
+// chunks, scalar updates and axpy kernels (runtime/cuda_runtime.cpp drives them).
+//
+// Conventions inside a fragment: `i` is the index in the domain, `b` the batch item,
+// `h` the cell size; tensors are bound as t_<tensor> (values) and a_<tensor>
+// (cotangents), static grid arrays as g_<name>, scratch buffers as s_<name>, solver
+// vectors as v_<name>; pointers are already offset to batch item b. Run-time values
+// (material, dt, theta, planes, tolerances) are always read through parameters.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "graph/graph.h"
+
+namespace ssc {
+
+// How many threads (per batch item) a kernel runs.
+enum class Extent { One, Cell, Node, Point, Band, Len, LenChunks };
+const char* extent_name(Extent e);
+Domain extent_domain(Extent e);
+
+constexpr int kDotChunk = 2048;  // entries per dot-product chunk (runtime/pcg.h uses the same)
+constexpr int kMaxPlaneBars = 32;  // 4 cotangent values x ops::kMaxGroundPlanes
+
+struct KernelParam {
+  enum class Kind { Tensor, Adjoint, Grid, Scratch, Vector, Value };
+  Kind kind = Kind::Tensor;
+  std::string name;    // identifier inside the kernel
+  std::string type;    // "Real", "int" or "double"
+  bool write = false;
+  bool gather = false;  // read at indices other than the thread's own
+  int tensor = -1;      // Tensor / Adjoint: graph tensor id
+  std::string stride;   // per-batch stride (elements); empty: shared by the batch / by value
+  Domain domain = Domain::Scalar;  // Scratch sizing: count(domain) * components per batch item
+  int components = 1;
+};
+
+struct Snippet {
+  std::string label;  // e.g. "corotation", "newmark_apply_cell"
+  int op = -1;
+  Extent extent = Extent::One;
+  bool barrier = false;  // reduction or solver stage: a kernel of its own
+  bool shared = false;   // solver kernel shared by forward and adjoint ("slv_" prefix)
+  std::string stage;     // solver stage description for the plan, empty for plain ops
+  std::vector<KernelParam> params;
+  std::string code;
+};
+
+// Forward fragment of a non-opaque op.
+Snippet forward_snippet(const Graph& g, int op);
+// Solver stages of an opaque op, forward or adjoint, in launch order (the iteration
+// kernels are marked "loop" in their stage).
+std::vector<Snippet> solver_snippets(const Graph& g, int op, bool adjoint);
+// The adjoint of one op as a sequence of fragments (per-element parts, node gathers,
+// ordered reductions; for opaque ops including their solver stages).
+std::vector<Snippet> adjoint_snippets(const Graph& g, int op);
+bool is_opaque(OpKind k);
+
+}  // namespace ssc

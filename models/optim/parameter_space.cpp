@@ -1,0 +1,90 @@
+// Parameter transforms (see parameter_space.h).
+#include "models/optim/parameter_space.h"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "models/io/errors.h"
+
+namespace ssc {
+
+ParameterAxis default_axis(const std::string& name, double nominal) {
+  ParameterAxis a;
+  a.name = name;
+  if (name == "youngs_modulus" || name == "density" || name == "mass_damping" || name == "stiffness_damping") {
+    a.kind = ParameterAxis::Kind::Positive;
+  } else if (name == "poisson_ratio") {
+    a.kind = ParameterAxis::Kind::Bounded;
+    a.lower = 0.01;
+    a.upper = 0.49;
+  } else if (name.find("polar_deg") != std::string::npos) {
+    a.kind = ParameterAxis::Kind::Bounded;
+    a.lower = 0;
+    a.upper = 90;
+  } else if (name.find("azimuth_deg") != std::string::npos) {
+    a.kind = ParameterAxis::Kind::Bounded;
+    a.lower = -180;
+    a.upper = 180;
+  } else {
+    a.kind = ParameterAxis::Kind::Free;
+    a.scale = std::max(std::abs(nominal), 1.0);
+  }
+  return a;
+}
+
+Eigen::VectorXd ParameterSpace::to_internal(const Eigen::VectorXd& x) const {
+  Eigen::VectorXd z(size());
+  for (int i = 0; i < size(); ++i) {
+    const ParameterAxis& a = axes_[i];
+    switch (a.kind) {
+      case ParameterAxis::Kind::Positive:
+        if (!(x[i] > 0)) throw InputError(fmt::format("{} must be positive, found {}", a.name, x[i]));
+        z[i] = std::log(x[i]);
+        break;
+      case ParameterAxis::Kind::Bounded: {
+        if (!(x[i] > a.lower && x[i] < a.upper))
+          throw InputError(fmt::format("{} must be strictly between {} and {}, found {}", a.name, a.lower, a.upper, x[i]));
+        const double t = (x[i] - a.lower) / (a.upper - a.lower);
+        z[i] = std::log(t / (1 - t));
+        break;
+      }
+      case ParameterAxis::Kind::Free:
+        z[i] = x[i] / a.scale;
+        break;
+    }
+  }
+  return z;
+}
+
+Eigen::VectorXd ParameterSpace::to_physical(const Eigen::VectorXd& z) const {
+  Eigen::VectorXd x(size());
+  for (int i = 0; i < size(); ++i) {
+    const ParameterAxis& a = axes_[i];
+    switch (a.kind) {
+      case ParameterAxis::Kind::Positive: x[i] = std::exp(z[i]); break;
+      case ParameterAxis::Kind::Bounded: x[i] = a.lower + (a.upper - a.lower) / (1 + std::exp(-z[i])); break;
+      case ParameterAxis::Kind::Free: x[i] = a.scale * z[i]; break;
+    }
+  }
+  return x;
+}
+
+Eigen::VectorXd ParameterSpace::gradient_to_internal(const Eigen::VectorXd& z, const Eigen::VectorXd& g) const {
+  Eigen::VectorXd out(size());
+  for (int i = 0; i < size(); ++i) {
+    const ParameterAxis& a = axes_[i];
+    switch (a.kind) {
+      case ParameterAxis::Kind::Positive: out[i] = g[i] * std::exp(z[i]); break;
+      case ParameterAxis::Kind::Bounded: {
+        const double s = 1 / (1 + std::exp(-z[i]));
+        out[i] = g[i] * (a.upper - a.lower) * s * (1 - s);
+        break;
+      }
+      case ParameterAxis::Kind::Free: out[i] = g[i] * a.scale; break;
+    }
+  }
+  return out;
+}
+
+}  // namespace ssc

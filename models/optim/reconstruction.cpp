@@ -1,0 +1,155 @@
+// Batched multi-start reconstruction (see reconstruction.h).
+#include "models/optim/reconstruction.h"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cmath>
+#include <random>
+
+#include "models/io/errors.h"
+#include "models/sim/parameters.h"
+
+namespace ssc {
+namespace {
+
+PhysicalParameters with_values(PhysicalParameters p, const std::vector<std::string>& names, const Eigen::VectorXd& x) {
+  for (size_t i = 0; i < names.size(); ++i) set_parameter(p, names[i], x[i]);
+  return p;
+}
+
+// Evaluates the starts in `items` as one batch; on a simulation failure, one by one so
+// that only the failing starts are dropped. Returns false for a failed item.
+std::vector<bool> evaluate_batch(const Problem& problem, const SurfaceConstraintCost& cost, const PhysicalParameters& base,
+                                 const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& points,
+                                 std::vector<CostGradient>* results, std::vector<std::string>* failures) {
+  const int n = int(points.size());
+  std::vector<bool> ok(n, true);
+  results->assign(n, CostGradient{});
+  failures->assign(n, "");
+  try {
+    Simulation sim(problem.scene, problem.grid, n, true);
+    for (int i = 0; i < n; ++i) sim.set_parameters(i, with_values(base, names, points[i]));
+    *results = evaluate_cost_gradient(sim, cost, problem.frames);
+    return ok;
+  } catch (const SimulationError&) {
+    if (n == 1) throw;
+  }
+  for (int i = 0; i < n; ++i) {
+    try {
+      Simulation sim(problem.scene, problem.grid, 1, true);
+      sim.set_parameters(0, with_values(base, names, points[i]));
+      (*results)[i] = evaluate_cost_gradient(sim, cost, problem.frames)[0];
+    } catch (const SimulationError& e) {
+      ok[i] = false;
+      (*failures)[i] = e.what();
+    }
+  }
+  return ok;
+}
+
+}  // namespace
+
+std::vector<Eigen::VectorXd> sample_starts(const ParameterSpace& space, const Eigen::VectorXd& nominal,
+                                           const ReconstructionOptions& o) {
+  if (!o.initial_values.empty()) return o.initial_values;
+  std::mt19937_64 rng(o.seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Eigen::VectorXd> starts;
+  for (int s = 0; s < o.starts; ++s) {
+    Eigen::VectorXd x(space.size());
+    for (int i = 0; i < space.size(); ++i) {
+      const ParameterAxis& a = space.axes()[i];
+      const double u = unit(rng);
+      switch (a.kind) {
+        case ParameterAxis::Kind::Positive:
+          x[i] = nominal[i] * std::exp(std::log(o.low) + u * (std::log(o.high) - std::log(o.low)));
+          break;
+        case ParameterAxis::Kind::Bounded: {
+          const double margin = 0.02 * (a.upper - a.lower);
+          x[i] = a.lower + margin + u * (a.upper - a.lower - 2 * margin);
+          break;
+        }
+        case ParameterAxis::Kind::Free:
+          x[i] = nominal[i] + (2 * u - 1) * o.spread * std::max(std::abs(nominal[i]), 1.0);
+          break;
+      }
+    }
+    starts.push_back(x);
+  }
+  return starts;
+}
+
+ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOptions& o,
+                                 const ReconstructionProgress& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const PhysicalParameters base = PhysicalParameters::from_scene(problem.scene);
+  ReconstructionResult result;
+  result.names = expand_parameter_names(o.fit, base);
+  if (result.names.empty()) throw InputError("--fit: name at least one parameter to fit");
+  std::vector<ParameterAxis> axes;
+  result.nominal.resize(int(result.names.size()));
+  for (size_t i = 0; i < result.names.size(); ++i) {
+    result.nominal[i] = get_parameter(base, result.names[i]);
+    axes.push_back(default_axis(result.names[i], result.nominal[i]));
+    result.units.push_back(parameter_unit(result.names[i]));
+  }
+  const ParameterSpace space(axes);
+  const std::vector<Eigen::VectorXd> initial = sample_starts(space, result.nominal, o);
+  const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
+
+  const int S = int(initial.size());
+  std::vector<std::unique_ptr<Optimizer>> opt;
+  result.starts.resize(S);
+  for (int s = 0; s < S; ++s) {
+    result.starts[s].initial = initial[s];
+    opt.push_back(make_optimizer(o.optimizer, space.to_internal(initial[s]), o.optimizer_options));
+  }
+  for (int round = 0;; ++round) {
+    std::vector<int> active;
+    for (int s = 0; s < S; ++s)
+      if (!opt[s]->done() && !result.starts[s].failed) active.push_back(s);
+    if (active.empty()) break;
+    std::vector<Eigen::VectorXd> points;
+    for (int s : active) points.push_back(space.to_physical(opt[s]->ask()));
+    std::vector<CostGradient> values;
+    std::vector<std::string> failures;
+    const std::vector<bool> ok = evaluate_batch(problem, cost, base, result.names, points, &values, &failures);
+    result.evaluations += int(active.size());
+    for (size_t k = 0; k < active.size(); ++k) {
+      StartRecord& rec = result.starts[active[k]];
+      if (!ok[k]) {
+        rec.failed = true;
+        rec.failure = failures[k];
+        continue;
+      }
+      Eigen::VectorXd g(space.size());
+      for (int i = 0; i < space.size(); ++i) g[i] = parameter_gradient(values[k].gradient, with_values(base, result.names, points[k]), result.names[i]);
+      const int before = opt[active[k]]->iterations();
+      opt[active[k]]->tell(values[k].cost, space.gradient_to_internal(opt[active[k]]->ask(), g));
+      if (opt[active[k]]->iterations() != before || rec.cost_history.empty()) {
+        rec.cost_history.push_back(values[k].cost);
+        rec.parameter_history.push_back(points[k]);
+      }
+    }
+    if (progress) {
+      int best = -1;
+      for (int s = 0; s < S; ++s)
+        if (!result.starts[s].failed && (best < 0 || opt[s]->best_cost() < opt[best]->best_cost())) best = s;
+      if (best >= 0) progress(round + 1, int(active.size()), opt[best]->best_cost(), space.to_physical(opt[best]->best_point()));
+    }
+  }
+  for (int s = 0; s < S; ++s) {
+    StartRecord& rec = result.starts[s];
+    rec.iterations = opt[s]->iterations();
+    rec.stop_reason = rec.failed ? "simulation failed" : opt[s]->stop_reason();
+    if (rec.failed || opt[s]->best_point().size() == 0) continue;
+    rec.final = space.to_physical(opt[s]->best_point());
+    rec.final_cost = opt[s]->best_cost();
+    if (result.best < 0 || rec.final_cost < result.starts[result.best].final_cost) result.best = s;
+  }
+  result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+}  // namespace ssc

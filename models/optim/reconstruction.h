@@ -1,0 +1,63 @@
+// Reconstruction of physical parameters from observations: N perturbed starts, each an
+// optimiser in the parameter space of the fitted parameters, advanced in lockstep with
+// all active starts' simulations evaluated as one batch. A start whose simulation fails
+// is reported and dropped; the start with the lowest final cost is the result.
+//
+// Starts: positive parameters are drawn log-uniformly in [low, high] x nominal (default
+// [0.1, 10]), bounded ones uniformly in their bounds, free ones uniformly in
+// nominal +- spread x max(|nominal|, 1) (default spread 0.5). Seeded, so a run repeats.
+#pragma once
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "models/optim/optimizer.h"
+#include "models/optim/parameter_space.h"
+#include "models/sim/problem.h"
+
+namespace ssc {
+
+struct ReconstructionOptions {
+  std::vector<std::string> fit;  // parameter names (vectors expand)
+  int starts = 20;
+  std::string optimizer = "rprop";
+  OptimizerOptions optimizer_options;
+  std::uint64_t seed = 1;
+  double low = 0.1, high = 10.0;  // multiplicative range of positive parameters
+  double spread = 0.5;            // relative range of free parameters
+  std::vector<Eigen::VectorXd> initial_values;  // overrides the sampling when non-empty (one per start)
+};
+
+struct StartRecord {
+  Eigen::VectorXd initial, final;   // physical values
+  double final_cost = 0;
+  std::vector<double> cost_history;                // per iteration (cost at the point evaluated)
+  std::vector<Eigen::VectorXd> parameter_history;  // physical values per iteration
+  int iterations = 0;
+  std::string stop_reason;
+  bool failed = false;
+  std::string failure;
+};
+
+struct ReconstructionResult {
+  std::vector<std::string> names;
+  std::vector<std::string> units;
+  Eigen::VectorXd nominal;
+  std::vector<StartRecord> starts;
+  int best = -1;  // index into starts, -1 if every start failed
+  int evaluations = 0;
+  double wall_seconds = 0;
+};
+
+using ReconstructionProgress = std::function<void(int iteration, int active, double best_cost, const Eigen::VectorXd& best)>;
+
+ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOptions& options,
+                                 const ReconstructionProgress& progress = {});
+
+// The sampled start values (physical), exposed for tests.
+std::vector<Eigen::VectorXd> sample_starts(const ParameterSpace& space, const Eigen::VectorXd& nominal,
+                                           const ReconstructionOptions& options);
+
+}  // namespace ssc

@@ -1,0 +1,56 @@
+// The CUDA driver API, loaded at run time with dlopen("libcuda.so.1"), so that ssc
+// builds and runs on machines without a GPU driver: there, cuda_driver() reports
+// "no usable GPU: <reason>" instead of failing to start. Only the entry points the
+// runtime uses are declared, with their ABI (_v2) names; types are the driver's.
+#pragma once
+#include <cstddef>
+#include <string>
+
+namespace ssc {
+namespace cu {
+
+using Result = int;
+using Device = int;
+using Context = struct CUctx_st*;
+using Module = struct CUmod_st*;
+using Function = struct CUfunc_st*;
+using Stream = struct CUstream_st*;
+using DevicePtr = unsigned long long;
+
+struct Driver {
+  Result (*Init)(unsigned);
+  Result (*DeviceGetCount)(int*);
+  Result (*DeviceGet)(Device*, int);
+  Result (*DeviceGetName)(char*, int, Device);
+  Result (*DeviceGetAttribute)(int*, int, Device);
+  Result (*DevicePrimaryCtxRetain)(Context*, Device);
+  Result (*DevicePrimaryCtxRelease)(Device);
+  Result (*CtxSetCurrent)(Context);
+  Result (*CtxSynchronize)();
+  Result (*ModuleLoadData)(Module*, const void*);
+  Result (*ModuleUnload)(Module);
+  Result (*ModuleGetFunction)(Function*, Module, const char*);
+  Result (*FuncGetAttribute)(int*, int, Function);
+  Result (*MemAlloc)(DevicePtr*, size_t);
+  Result (*MemFree)(DevicePtr);
+  Result (*MemcpyHtoD)(DevicePtr, const void*, size_t);
+  Result (*MemcpyDtoH)(void*, DevicePtr, size_t);
+  Result (*MemsetD8)(DevicePtr, unsigned char, size_t);
+  Result (*LaunchKernel)(Function, unsigned, unsigned, unsigned, unsigned, unsigned, unsigned, unsigned, Stream,
+                         void**, void**);
+  Result (*GetErrorString)(Result, const char**);
+  Result (*DriverGetVersion)(int*);
+};
+
+// Attribute ids (cuda.h values).
+constexpr int kAttrComputeCapabilityMajor = 75, kAttrComputeCapabilityMinor = 76;
+constexpr int kFuncAttrNumRegs = 4, kFuncAttrSharedSizeBytes = 1, kFuncAttrLocalSizeBytes = 3;
+
+// The loaded driver with cuInit done and at least one device, or nullptr; `why` then
+// says what is missing (no libcuda, cuInit error, no device).
+const Driver* driver(std::string* why);
+// Throws std::runtime_error("<what>: <driver message>") when r != 0.
+void check(Result r, const char* what);
+
+}  // namespace cu
+}  // namespace ssc

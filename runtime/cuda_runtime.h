@@ -1,0 +1,82 @@
+// One forward timestep of a graph on the GPU, from generated kernels (codegen/) compiled
+// with NVRTC (runtime/nvrtc_compiler.h) and launched through the driver API
+// (runtime/cuda_driver.h).
+//
+// The constructor plans the graph, compiles every forward kernel in parallel (cached),
+// loads the modules and uploads the static grid data (cell nodes, volume weights, the
+// node<-(cell, corner) and node<-(point, side) incidence lists, band neighbours, and a
+// node<-band list built here). run() launches the planned kernels in order; an opaque
+// solve becomes the Jacobi-PCG kernel sequence (element apply, node gather, ordered
+// dot-product chunks, scalar update, axpy), every item of the batch frozen on the device
+// at exactly the iteration where the interpreter would stop, with a host check of the
+// solver state every `check_every` iterations. Dot products are summed in the
+// interpreter's order (chunks of 2048, in double), so with --fmad=false the GPU step
+// follows the interpreter's arithmetic closely. No atomics: results are bitwise
+// reproducible run to run.
+#pragma once
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "graph/graph.h"
+#include "models/grid/sim_grid.h"
+#include "runtime/interpreter.h"
+#include "runtime/nvrtc_compiler.h"
+#include "runtime/tensor_store.h"
+
+namespace ssc {
+
+class GpuUnavailable : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Empty when a GPU can run kernels, else "no usable GPU: <reason>".
+std::string gpu_unavailable_reason();
+// "NVIDIA H100 80GB HBM3 (sm_90)", or the reason there is none.
+std::string gpu_description();
+
+struct GpuOptions {
+  std::string real = "double";  // "double" or "float"
+  std::string arch;             // empty: the device's sm_XY
+  bool fmad = false;            // --fmad (false: comparable with the interpreter)
+  int check_every = 8;          // CG iterations between host checks of the solver state
+  bool profile = false;         // synchronise after every launch and time it
+};
+
+struct GpuKernelTiming {
+  std::string name;
+  int launches = 0;
+  double ms = 0;
+  int registers = 0;
+};
+
+class GpuTimestep {
+ public:
+  // Throws GpuUnavailable when there is no usable GPU, NvrtcError when a kernel fails.
+  GpuTimestep(const Graph& graph, const SimGrid& grid, int batch, const SolverOptions& solver,
+              const GpuOptions& options = {});
+  ~GpuTimestep();
+  GpuTimestep(const GpuTimestep&) = delete;
+  GpuTimestep& operator=(const GpuTimestep&) = delete;
+
+  // Copies every input and state tensor (all batch items) to the device.
+  void upload(const TensorStore<double>& store);
+  // One forward step; throws SimulationError if a solve does not converge.
+  void run();
+  // Copies every tensor back (converted to double).
+  void download(TensorStore<double>& store) const;
+
+  const std::vector<int>& cg_iterations() const;
+  std::vector<GpuKernelTiming> timings() const;  // per kernel, with options.profile
+  double compile_seconds() const;
+  int kernel_count() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ssc

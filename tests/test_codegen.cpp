@@ -1,0 +1,363 @@
+// The CUDA code generator (codegen/) and its NVRTC compiler (runtime/nvrtc_compiler):
+//  - CodegenPlan: snapshot of the kernel plan of the torus timestep graph (hashes
+//    sanitised) against tests/data/codegen_torus_plan.txt (SSC_UPDATE_SNAPSHOTS=1 rewrites it),
+//    fusion and cut rules, no atomics, run-time values absent from the source;
+//  - NvrtcCompile: every forward and adjoint kernel of the example graphs compiles for
+//    sm_90 in double and float (skipped without NVRTC), the cache and its keys;
+//  - GpuForward: one forward step on the GPU against the interpreter, and determinism
+//    (skipped without a usable GPU).
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "codegen/cuda_source.h"
+#include "codegen/kernel_plan.h"
+#include "codegen/sha256.h"
+#include "models/sim/body.h"
+#include "models/sim/scene.h"
+#include "models/sim/simulation.h"
+#include "models/sim/timestep_graph.h"
+#include "runtime/cuda_runtime.h"
+#include "runtime/nvrtc_compiler.h"
+
+namespace ssc {
+namespace {
+
+namespace fs = std::filesystem;
+
+// One kernel cache per test process, shared by the tests of this file.
+const std::string& test_cache_root() {
+  static const std::string dir = [] {
+    const fs::path p = fs::temp_directory_path() / ("ssc-test-kernels-" + std::to_string(getpid()));
+    fs::create_directories(p);
+    setenv("SSC_KERNEL_CACHE", p.c_str(), 1);
+    return p.string();
+  }();
+  return dir;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+NvrtcOptions test_options(const std::string& arch = "sm_90") {
+  NvrtcOptions o;
+  o.arch = arch;
+  o.fmad = false;
+  return o;
+}
+
+TEST(CodegenSha256, KnownVectors) {
+  EXPECT_EQ(sha256_hex(""), "e3b0c44298fc1c149afbf4c8996fb92427ae41e4649b934ca495991b7852b855");
+  EXPECT_EQ(sha256_hex("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  EXPECT_EQ(sha256_hex(std::string(1000, 'a')), "41edece42d63e8d9bf515a9ba6932e1c20cbc9f5a5d134645adb5db1b9737ea3");
+}
+
+TEST(CodegenPlan, TorusSnapshot) {
+  const TimestepGraph t = build_timestep_graph(1, true);
+  const std::string text = plan_kernels(t.graph).text(t.graph, true);
+  const fs::path ref = fs::path(SSC_SOURCE_DIR) / "tests/data/codegen_torus_plan.txt";
+  if (std::getenv("SSC_UPDATE_SNAPSHOTS")) std::ofstream(ref) << text;
+  ASSERT_TRUE(fs::exists(ref)) << "missing " << ref << " (run with SSC_UPDATE_SNAPSHOTS=1)";
+  EXPECT_EQ(text, read_text(ref)) << "the kernel plan changed; review it and run with SSC_UPDATE_SNAPSHOTS=1";
+}
+
+TEST(CodegenPlan, FusionAndCuts) {
+  const TimestepGraph t = build_timestep_graph(1, true);
+  const KernelPlan plan = plan_kernels(t.graph);
+  // Corotation and its offset force share the cell kernel (pointwise rotation).
+  const PlannedKernel* corot = plan.find(false, "corotation");
+  ASSERT_NE(corot, nullptr);
+  ASSERT_EQ(corot->parts.size(), 2u);
+  EXPECT_EQ(corot->parts[1].label, "corotation_force");
+  EXPECT_EQ(corot->name.rfind("fwd_cell_corotation_corotation_force__", 0), 0u) << corot->name;
+  // The solve is a solver sequence, each stage its own kernel.
+  for (const char* label : {"newmark_apply_cell", "newmark_apply_node", "pcg_dot", "pcg_update", "extension_apply"})
+    EXPECT_NE(plan.find(false, label), nullptr) << label;
+  for (const PlannedKernel& k : plan.forward) EXPECT_FALSE(k.cut.empty()) << k.name;
+  // The adjoint runs ops in reverse: the first adjoint kernel belongs to the last op.
+  ASSERT_FALSE(plan.adjoint.empty());
+  EXPECT_EQ(plan.adjoint.front().ops.front(), int(t.graph.ops().size()) - 1);
+  EXPECT_NE(plan.find(true, "corotation"), nullptr);
+  EXPECT_NE(plan.find(true, "stiffness_apply"), nullptr);
+}
+
+TEST(CodegenSource, NoAtomicsAndLineDirectives) {
+  const TimestepGraph t = build_timestep_graph(1, true);
+  const KernelPlan plan = plan_kernels(t.graph);
+  for (const PlannedKernel* k : plan.unique_kernels()) {
+    const std::string src = kernel_function(*k);
+    EXPECT_EQ(src.find("atomic"), std::string::npos) << k->name;
+    EXPECT_NE(src.find("extern \"C\" __global__"), std::string::npos);
+  }
+  const std::string prelude = kernel_prelude({});
+  EXPECT_NE(prelude.find("#line 1 \"ops/elasticity.h\""), std::string::npos);
+  EXPECT_NE(prelude.find("typedef double Real;"), std::string::npos);
+  EXPECT_NE(kernel_prelude({"float", 128}).find("typedef float Real;"), std::string::npos);
+}
+
+Scene torus_scene(const std::vector<std::string>& overrides = {}) {
+  return load_scene(std::string(SSC_SOURCE_DIR) + "/examples/torus.json", overrides);
+}
+
+TEST(CodegenSource, RunTimeValuesAreParameters) {
+  // Two scenes that differ in E, dt, damping and the plane generate identical sources.
+  auto sources = [](const Scene& s) {
+    const TimestepGraph t = build_timestep_graph(int(s.planes.size()), false);
+    std::string all;
+    const KernelPlan plan = plan_kernels(t.graph);
+    for (const PlannedKernel* k : plan.unique_kernels()) all += kernel_source(*k, {});
+    return all;
+  };
+  const Scene a = torus_scene();
+  const Scene b = torus_scene({"material.youngs_modulus=12345.678", "time.dt=0.00731", "material.mass_damping=0.377",
+                               "ground.height=0.123"});
+  ASSERT_NE(a.material.youngs_modulus, b.material.youngs_modulus);
+  ASSERT_NE(a.time.dt, b.time.dt);
+  const std::string sa = sources(a), sb = sources(b);
+  EXPECT_EQ(sa, sb);
+  for (const char* v : {"12345.678", "0.00731", "0.377", "5000", "0.01"}) EXPECT_EQ(sb.find(v), std::string::npos) << v;
+}
+
+// ---- NVRTC ----
+
+#define SKIP_WITHOUT_NVRTC() \
+  if (!nvrtc_available()) GTEST_SKIP() << "ssc was built without NVRTC (no CUDA toolkit): kernels not compiled"
+
+std::vector<KernelSource> example_kernel_sources(const std::string& real) {
+  std::vector<KernelSource> out;
+  std::set<std::string> seen;
+  for (auto [planes, extension] : {std::pair{1, true}, std::pair{0, false}, std::pair{1, false}}) {
+    const TimestepGraph t = build_timestep_graph(planes, extension);
+    const KernelPlan plan = plan_kernels(t.graph);
+    for (const PlannedKernel* k : plan.unique_kernels())
+      if (seen.insert(k->name).second) out.push_back({k->name, kernel_source(*k, {real, 128})});
+  }
+  return out;
+}
+
+TEST(NvrtcCompile, AllExampleKernelsDoubleAndFloat) {
+  SKIP_WITHOUT_NVRTC();
+  test_cache_root();
+  for (const char* real : {"double", "float"}) {
+    const auto sources = example_kernel_sources(real);
+    const auto start = std::chrono::steady_clock::now();
+    const auto compiled = compile_kernels(sources, test_options());
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ASSERT_EQ(compiled.size(), sources.size());
+    int fresh = 0, max_regs = 0;
+    for (const CompiledKernel& k : compiled) {
+      EXPECT_FALSE(k.image.empty()) << k.name;
+      EXPECT_TRUE(k.is_cubin) << k.name << ": fell back to PTX";
+      EXPECT_TRUE(k.resources.known) << k.name << " log: " << k.log;
+      fresh += !k.from_cache;
+      max_regs = std::max(max_regs, k.resources.registers);
+    }
+    std::printf("[ %s ] %zu kernels, %d compiled, %.2f s wall, max %d registers\n", real, compiled.size(), fresh, s,
+                max_regs);
+    RecordProperty(std::string("compile_seconds_") + real, std::to_string(s));
+  }
+}
+
+TEST(NvrtcCache, SameCubinSecondTimeAndDistinctKeys) {
+  SKIP_WITHOUT_NVRTC();
+  test_cache_root();
+  const TimestepGraph t = build_timestep_graph(0, false);
+  const KernelPlan plan = plan_kernels(t.graph);
+  const PlannedKernel* k = plan.find(false, "velocity_update");
+  ASSERT_NE(k, nullptr);
+  const std::string src = kernel_source(*k, {});
+  const CompiledKernel a = compile_kernel(k->name, src, test_options());
+  const CompiledKernel b = compile_kernel(k->name, src, test_options());
+  EXPECT_TRUE(b.from_cache);
+  EXPECT_EQ(a.image, b.image);
+  EXPECT_EQ(a.key, b.key);
+  EXPECT_TRUE(fs::exists(fs::path(kernel_cache_dir()) / (a.key + ".cubin")));
+  NvrtcOptions fmad = test_options();
+  fmad.fmad = true;
+  EXPECT_NE(kernel_cache_key(src, fmad), a.key);
+  EXPECT_NE(kernel_cache_key(src, test_options("sm_80")), a.key);
+  EXPECT_NE(kernel_cache_key(src + " ", test_options()), a.key);
+  const CompiledKernel c = compile_kernel(k->name, src, test_options("sm_80"));
+  EXPECT_NE(c.image, a.image);
+}
+
+TEST(NvrtcCompile, ErrorNamesKernelSourceAndLog) {
+  SKIP_WITHOUT_NVRTC();
+  NvrtcOptions o = test_options();
+  o.use_cache = false;
+  try {
+    compile_kernel("broken_kernel", "extern \"C\" __global__ void broken_kernel() { this_is_not_defined(); }", o);
+    FAIL() << "expected NvrtcError";
+  } catch (const NvrtcError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("broken_kernel"), std::string::npos) << m;
+    EXPECT_NE(m.find("broken_kernel.cu"), std::string::npos) << m;
+    EXPECT_NE(m.find("this_is_not_defined"), std::string::npos) << m;
+  }
+}
+
+TEST(NvrtcCompile, PtxasLogParsing) {
+  const std::string log =
+      "ptxas info    : Compiling entry function 'k1' for 'sm_90'\n"
+      "ptxas info    : Function properties for k1\n"
+      "    16 bytes stack frame, 8 bytes spill stores, 4 bytes spill loads\n"
+      "ptxas info    : Used 72 registers, used 0 barriers, 1024 bytes smem, 400 bytes cmem[0]\n"
+      "ptxas info    : Compiling entry function 'k2' for 'sm_90'\n"
+      "ptxas info    : Used 12 registers\n";
+  const KernelResources r = parse_ptxas_log(log, "k1");
+  EXPECT_TRUE(r.known);
+  EXPECT_EQ(r.registers, 72);
+  EXPECT_EQ(r.shared_bytes, 1024);
+  EXPECT_EQ(r.stack_bytes, 16);
+  EXPECT_EQ(r.spill_store_bytes, 8);
+  EXPECT_EQ(r.spill_load_bytes, 4);
+  EXPECT_EQ(parse_ptxas_log(log, "k2").registers, 12);
+}
+
+}  // namespace
+}  // namespace ssc
+
+// ---- GPU (skipped without a usable GPU) ----
+
+namespace ssc {
+namespace {
+
+#define SKIP_WITHOUT_GPU()                                                   \
+  do {                                                                       \
+    const std::string why = gpu_unavailable_reason();                        \
+    if (!why.empty()) GTEST_SKIP() << why;                                   \
+  } while (0)
+
+void gpu_vs_interpreter(const std::string& real, double tolerance) {
+  const Scene scene = torus_scene();
+  const SimGrid grid = build_body_grid(scene);
+  Simulation sim(scene, grid, 2, true);
+  PhysicalParameters p = sim.parameters(1);
+  p.youngs_modulus *= 1.7;  // batch items differ
+  p.linear_velocity = Eigen::Vector3d(0.3, -1.0, 0.2);
+  sim.set_parameters(1, p);
+  for (int s = 0; s < 3; ++s) sim.step();  // a deformed, moving state
+  Interpreter<double>& cpu = sim.interpreter();
+  TensorStore<double> before = cpu.store();
+  SolverOptions so = cpu.options();
+  GpuOptions go;
+  go.real = real;
+  GpuTimestep gpu(cpu.graph(), grid, 2, so, go);
+  gpu.upload(before);
+  gpu.run();
+  TensorStore<double> got = before;
+  gpu.download(got);
+  cpu.run();
+  // The step's outputs (u, v, band_u) against the tolerance; intermediates are printed:
+  // the offset force -R K (R^T x - x) cancels for small rotations, so its relative error
+  // is that of R (a few ULP from cbrt) amplified, not a property of the generated code.
+  std::string which, all;
+  double err = 0;
+  for (size_t t = 0; t < cpu.graph().tensors().size(); ++t) {
+    const TensorInfo& info = cpu.graph().tensor(int(t));
+    if (info.role != TensorInfo::Role::Intermediate) continue;
+    const std::vector<double>& x = cpu.store().all(int(t));
+    const std::vector<double>& y = got.all(int(t));
+    double diff = 0, norm = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+      diff = std::max(diff, std::abs(x[i] - y[i]));
+      norm = std::max(norm, std::abs(x[i]));
+    }
+    const double rel = norm > 0 ? diff / norm : diff;
+    all += fmt::format(" {}={:.2g}", info.name, rel);
+    if ((info.name == "u" || info.name == "v" || info.name == "band_u") && rel >= err) {
+      err = rel;
+      which = info.name;
+    }
+  }
+  std::printf("[ %s ] per-tensor relative error:%s\n", real.c_str(), all.c_str());
+  std::printf("[ %s ] GPU vs interpreter: worst relative error %.3g (%s); CG iterations GPU %d/%d, CPU %d/%d; "
+              "compile %.2f s for %d kernels\n",
+              real.c_str(), err, which.c_str(), gpu.cg_iterations()[0], gpu.cg_iterations()[1],
+              cpu.report().cg_iterations[0], cpu.report().cg_iterations[1], gpu.compile_seconds(), gpu.kernel_count());
+  EXPECT_LT(err, tolerance) << which;
+  // Determinism: a second run from the same inputs is bitwise equal.
+  gpu.upload(before);
+  gpu.run();
+  TensorStore<double> again = before;
+  gpu.download(again);
+  for (size_t t = 0; t < cpu.graph().tensors().size(); ++t)
+    EXPECT_TRUE(again.all(int(t)) == got.all(int(t))) << cpu.graph().tensor(int(t)).name;
+}
+
+TEST(GpuForward, DoubleMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  gpu_vs_interpreter("double", 1e-10);
+}
+
+TEST(GpuForward, FloatMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  gpu_vs_interpreter("float", 1e-4);
+}
+
+TEST(GpuForward, ReportsMissingGpuCleanly) {
+  const std::string why = gpu_unavailable_reason();
+  if (why.empty()) GTEST_SKIP() << "a GPU is present: " << gpu_description();
+  EXPECT_EQ(why.rfind("no usable GPU: ", 0), 0u) << why;
+  const TimestepGraph t = build_timestep_graph(0, false);
+  SimGrid grid;
+  try {
+    GpuTimestep gpu(t.graph, grid, 1, SolverOptions{});
+    FAIL() << "expected GpuUnavailable";
+  } catch (const GpuUnavailable& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("no usable GPU: ", 0), 0u) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace ssc
+
+namespace ssc {
+namespace {
+
+TEST(GpuForward, ProfileTorusStep) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  const Scene scene = torus_scene();
+  const SimGrid grid = build_body_grid(scene);
+  Simulation sim(scene, grid, 1, true);
+  for (int s = 0; s < 2; ++s) sim.step();
+  for (const char* real : {"double", "float"}) {
+    GpuOptions go;
+    go.real = real;
+    go.profile = true;
+    GpuTimestep gpu(sim.interpreter().graph(), grid, 1, sim.interpreter().options(), go);
+    gpu.upload(sim.interpreter().store());
+    gpu.run();
+    go.profile = false;
+    GpuTimestep fast(sim.interpreter().graph(), grid, 1, sim.interpreter().options(), go);
+    fast.upload(sim.interpreter().store());
+    fast.run();
+    const auto start = std::chrono::steady_clock::now();
+    for (int k = 0; k < 5; ++k) fast.run();
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / 5;
+    std::printf("[ %s ] torus forward step on %s: %.3f ms (unprofiled, %d CG iterations)\n", real,
+                gpu_description().c_str(), ms, fast.cg_iterations()[0]);
+    for (const GpuKernelTiming& t : gpu.timings())
+      std::printf("  %-7s %-52s %5d launches %8.4f ms/launch %4d regs\n", real, t.name.c_str(), t.launches,
+                  t.ms / t.launches, t.registers);
+  }
+}
+
+}  // namespace
+}  // namespace ssc

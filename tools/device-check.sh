@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# Builds ssc on a GPU machine (Ubuntu 24.04, CUDA 13, CMake >= 3.20, no network needed)
+# into build-gpu/, runs the code-generator and GPU tests, any benchmark binary, and
+# prints a short summary table last. Usage: tools/device-check.sh [extra gtest filter]
+set -uo pipefail
+cd "$(dirname "$0")/.."
+ROOT=$PWD
+BUILD=$ROOT/build-gpu
+JOBS=$(nproc 2>/dev/null || echo 4)
+LOG=$BUILD/device-check
+mkdir -p "$LOG"
+export SSC_KERNEL_CACHE=${SSC_KERNEL_CACHE:-$BUILD/kernel-cache}
+export SSC_DUMP_KERNELS=${SSC_DUMP_KERNELS:-$LOG/kernels}
+
+echo "== GPU"
+nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader 2>/dev/null || echo "(nvidia-smi unavailable)"
+echo "== configure + build ($JOBS jobs)"
+t0=$(date +%s)
+if ! cmake -S "$ROOT" -B "$BUILD" -DCMAKE_BUILD_TYPE=Release -DCUDAToolkit_ROOT=${CUDA_HOME:-/usr/local/cuda} \
+     >"$LOG/cmake.log" 2>&1; then
+  tail -30 "$LOG/cmake.log"; echo "configure failed"; exit 1
+fi
+if ! cmake --build "$BUILD" -j"$JOBS" >"$LOG/build.log" 2>&1; then
+  grep -E "error|Error" "$LOG/build.log" | head -30; echo "build failed"; exit 1
+fi
+t1=$(date +%s)
+
+FILTER='Codegen*:Nvrtc*:Gpu*'${1:+:$1}
+echo "== tests: $FILTER"
+"$BUILD/bin/ssc_tests" --gtest_filter="$FILTER" --gtest_output=json:"$LOG/tests.json" 2>&1 | tee "$LOG/tests.txt"
+test_rc=${PIPESTATUS[0]}
+
+bench_rc=-
+if [ -x "$BUILD/bin/ssc_bench" ]; then
+  echo "== benchmarks"
+  "$BUILD/bin/ssc_bench" --benchmark_min_time=0.05s 2>&1 | tee "$LOG/bench.txt"
+  bench_rc=${PIPESTATUS[0]}
+fi
+
+echo "== kernel table (ssc kernels)"
+"$BUILD/bin/ssc" kernels "$ROOT/examples/torus.json" --out "$LOG/kernels-torus" 2>&1 | tail -60 | tee "$LOG/kernels.txt"
+
+passed=$(grep -c '^\[       OK \]' "$LOG/tests.txt")
+failed=$(grep -c '^\[  FAILED  \] [A-Za-z]' "$LOG/tests.txt")
+skipped=$(grep -c '^\[  SKIPPED \] [A-Za-z]' "$LOG/tests.txt")
+echo
+echo "================ device check summary ================"
+printf "%-28s %s\n" "build time" "$((t1 - t0)) s"
+printf "%-28s %s\n" "tests passed/failed/skipped" "$passed/$failed/$skipped (rc $test_rc)"
+printf "%-28s %s\n" "benchmarks" "$bench_rc"
+grep -E "^\[ (double|float) \]" "$LOG/tests.txt" | sed 's/^/  /'
+grep -E "ms/launch" "$LOG/kernels.txt" | head -40 | sed 's/^/  /'
+exit "$test_rc"

@@ -1,0 +1,86 @@
+// `ssc kernels SCENE --out DIR [--arch sm_90] [--real float|double]`: writes the kernel
+// plan of the scene's timestep graph (plan.txt) and the CUDA source of every forward and
+// adjoint kernel (kernels/<name>.cu), compiles each with NVRTC (in parallel, cached) and
+// prints a table of registers, shared memory and spills. Needs no GPU.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+
+#include "codegen/cuda_source.h"
+#include "codegen/kernel_plan.h"
+#include "models/io/errors.h"
+#include "models/sim/scene.h"
+#include "models/sim/timestep_graph.h"
+#include "runtime/nvrtc_compiler.h"
+#include "tools/ssc/commands.h"
+
+namespace ssc {
+namespace {
+
+struct KernelsOptions {
+  std::string scene, out, arch = "sm_90", real = "double";
+  bool extension = true, no_compile = false, fmad = false;
+};
+
+int run_kernels(const KernelsOptions& o) {
+  namespace fs = std::filesystem;
+  if (o.real != "double" && o.real != "float") throw InputError("--real must be float or double, not " + o.real);
+  const Scene scene = load_scene(o.scene);
+  const TimestepGraph t = build_timestep_graph(int(scene.planes.size()), o.extension);
+  const KernelPlan plan = plan_kernels(t.graph);
+  fs::create_directories(fs::path(o.out) / "kernels");
+  std::ofstream(fs::path(o.out) / "graph.txt") << t.graph.describe();
+  std::ofstream(fs::path(o.out) / "plan.txt") << plan.text(t.graph);
+  const CodegenOptions co{o.real, 128};
+  std::vector<KernelSource> sources;
+  for (const PlannedKernel* k : plan.unique_kernels()) {
+    sources.push_back({k->name, kernel_source(*k, co)});
+    std::ofstream(fs::path(o.out) / "kernels" / (k->name + ".cu")) << sources.back().source;
+  }
+  std::printf("%s: %zu forward and %zu adjoint launches per step, %zu distinct kernels (Real = %s)\n",
+              scene.file.c_str(), plan.forward.size(), plan.adjoint.size(), sources.size(), o.real.c_str());
+  std::printf("plan and sources written to %s\n", o.out.c_str());
+  if (o.no_compile) return 0;
+  if (!nvrtc_available()) {
+    std::fprintf(stderr, "ssc: NVRTC is not available (built without the CUDA toolkit): sources only\n");
+    return 0;
+  }
+  NvrtcOptions no;
+  no.arch = o.arch;
+  no.fmad = o.fmad;
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<CompiledKernel> compiled = compile_kernels(sources, no);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("\n%-58s %5s %6s %6s %7s %7s %9s\n", "kernel", "regs", "smem", "stack", "spill_s", "spill_l", "compile");
+  int cached = 0;
+  for (const CompiledKernel& k : compiled) {
+    const KernelResources& r = k.resources;
+    cached += k.from_cache;
+    std::printf("%-58s %5d %6d %6d %7d %7d %9s\n", k.name.c_str(), r.registers, r.shared_bytes, r.stack_bytes,
+                r.spill_store_bytes, r.spill_load_bytes,
+                k.from_cache ? "cached" : fmt::format("{:.0f} ms", k.compile_ms).c_str());
+  }
+  std::printf("\n%zu kernels for %s (%s, NVRTC %s): %.2f s wall, %d from the cache (%s)\n", compiled.size(),
+              o.arch.c_str(), std::all_of(compiled.begin(), compiled.end(), [](const CompiledKernel& k) { return k.is_cubin; }) ? "CUBIN" : "PTX fallback", nvrtc_version().c_str(), secs, cached,
+              kernel_cache_dir().empty() ? "cache off" : kernel_cache_dir().c_str());
+  return 0;
+}
+
+}  // namespace
+
+Command register_kernels(CLI::App& app) {
+  auto o = std::make_shared<KernelsOptions>();
+  CLI::App* sub = app.add_subcommand("kernels", "Write and compile the CUDA kernels of a scene's timestep (no GPU needed)");
+  sub->add_option("scene", o->scene, "Scene JSON file")->required();
+  sub->add_option("--out", o->out, "Output folder for plan.txt and kernels/*.cu")->required();
+  sub->add_option("--arch", o->arch, "GPU architecture, e.g. sm_90");
+  sub->add_option("--real", o->real, "float or double");
+  sub->add_flag("--fmad", o->fmad, "Allow fused multiply-add contraction (default off)");
+  sub->add_flag("--no-compile", o->no_compile, "Write plan and sources only");
+  return [o] { return run_kernels(*o); };
+}
+
+}  // namespace ssc
