@@ -48,7 +48,7 @@ template <class Real>
 inline void stiffness_apply_cells(const SimGrid& g, const Real* rotation, const Real* weights, Real lambda, Real mu,
                                   const Real* p, Real* corner_out) {
   const Real h = Real(g.h);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
   for (int e = 0; e < g.cell_count; ++e) {
     Vec3<Real> pc[8], y[8];
     ops::load_cell_corners(p, g.cell_nodes.data(), e, pc);
@@ -60,7 +60,7 @@ inline void stiffness_apply_cells(const SimGrid& g, const Real* rotation, const 
 // Node sums of per-corner vectors: out[i] (+)= sum over the corners touching node i.
 template <class Real>
 inline void gather_corners_to_nodes(const SimGrid& g, const Real* corner, Real* out, bool accumulate) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.node_count >= kParallelThreshold)
   for (int i = 0; i < g.node_count; ++i) {
     const Vec3<Real> s = ops::gather_corner_sum(corner, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
     if (accumulate)
@@ -85,7 +85,7 @@ struct NewmarkSystem {
 
   void apply(const Real* p, Real* q, std::vector<Real>& corner) const {
     stiffness_apply_cells(g, rotation, weights.data(), lambda, mu, p, corner.data());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.node_count >= kParallelThreshold)
     for (int i = 0; i < g.node_count; ++i) {
       const Vec3<Real> kp = ops::gather_corner_sum(corner.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
       store3(q, i, is_fixed(i) ? load3(p, i) : ops::newmark_system_apply(c, mass[i], load3(p, i), kp));
@@ -97,7 +97,7 @@ struct NewmarkSystem {
     const Real h = Real(g.h);
     const long n = 3L * g.node_count;
     std::vector<Real> corner(24 * size_t(g.cell_count)), inv_diag(n), b(n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
     for (int e = 0; e < g.cell_count; ++e) {
       Vec3<Real> d[8];
       ops::corotated_diagonal(load_rotation(rotation, e), weights.data() + 8 * e, lambda, mu, h, d);
@@ -125,7 +125,7 @@ inline PcgResult solve_band_laplacian(const SimGrid& g, const Real* rhs, Real* x
   for (int i = 0; i < g.band_count; ++i)
     for (int k = 0; k < 3; ++k) inv_diag[3 * i + k] = Real(1) / Real(g.band_degree[i]);
   auto apply = [&](const Real* p, Real* q) {
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.band_count >= kParallelThreshold)
     for (int i = 0; i < g.band_count; ++i) {
       Vec3<Real> s = Real(g.band_degree[i]) * load3(p, i);
       for (int d = 0; d < 6; ++d) {

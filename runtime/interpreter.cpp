@@ -82,7 +82,7 @@ void Interpreter<Real>::execute(const OpNode& op) {
         Real* rot = a.out("rotation");
         Real* status = a.out("polar_status");
         int degenerate = 0;
-#pragma omp parallel for schedule(static) reduction(+ : degenerate)
+#pragma omp parallel for schedule(static) reduction(+ : degenerate) if (g.cell_count >= kParallelThreshold)
         for (int e = 0; e < g.cell_count; ++e) {
           Vec3<Real> uc[8];
           ops::load_cell_corners(u, g.cell_nodes.data(), e, uc);
@@ -100,7 +100,7 @@ void Interpreter<Real>::execute(const OpNode& op) {
         const Real* rot = a.in("rotation");
         const Real lambda = a.scalar("lambda"), mu = a.scalar("mu");
         Real* f = a.out("corner_force");
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
         for (int e = 0; e < g.cell_count; ++e) {
           Vec3<Real> fc[8];
           ops::corotation_offset_force(load_rotation(rot, e), weights.data() + 8 * e, lambda, mu, h, fc);
@@ -121,7 +121,7 @@ void Interpreter<Real>::execute(const OpNode& op) {
         const Real dt = a.scalar("dt"), theta = a.scalar("theta");
         Real* f = a.out("point_force");
         const int n = int(g.collision_points.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
         for (int p = 0; p < n; ++p) {
           const CollisionPoint& cp = g.collision_points[p];
           const Real t = point_t_[p];
@@ -138,7 +138,7 @@ void Interpreter<Real>::execute(const OpNode& op) {
         const Real* m = a.in("mass");
         const Vec3<Real> grav = load3(a.in("gravity"), 0);
         Real* f = a.out("force");
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.node_count >= kParallelThreshold)
         for (int i = 0; i < g.node_count; ++i) {
           Vec3<Real> s = m[i] * grav + ops::gather_corner_sum(corner, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
           if (point)
@@ -157,7 +157,7 @@ void Interpreter<Real>::execute(const OpNode& op) {
         const Real* ku = a.in("ku_corner");
         const Real *m = a.in("mass"), *u = a.in("u_prev"), *v = a.in("v_prev"), *f = a.in("force");
         Real* rhs = a.out("rhs");
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.node_count >= kParallelThreshold)
         for (int i = 0; i < g.node_count; ++i) {
           const Vec3<Real> kui = ops::gather_corner_sum(ku, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
           store3(rhs, i, ops::newmark_rhs(c, m[i], load3(u, i), load3(v, i), kui, load3(f, i)));

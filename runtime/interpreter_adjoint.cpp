@@ -69,7 +69,7 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
         const Real* status = a.out("polar_status");
         const Real* rot_bar = d.out("rotation");
         std::vector<Real> corner(corner_size, Real(0));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
         for (int e = 0; e < g.cell_count; ++e) {
           Vec3<Real> uc[8], ub[8];
           ops::load_cell_corners(u, g.cell_nodes.data(), e, uc);
@@ -89,7 +89,7 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
         const Real* f_bar = d.out("corner_force");
         Real* rot_bar = const_cast<Real*>(d.in("rotation"));
         std::vector<Real> lb(g.cell_count), mb(g.cell_count);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
         for (int e = 0; e < g.cell_count; ++e) {
           Vec3<Real> fb[8];
           for (int c = 0; c < 8; ++c) fb[c] = load3(f_bar, 8 * e + c);
@@ -116,7 +116,7 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
         const Real* f_bar = d.out("point_force");
         const int n = int(g.collision_points.size());
         std::vector<Real> x_bar(3 * size_t(n)), v_bar(3 * size_t(n)), plane_bar(4 * size_t(n) * plane_count);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
         for (int p = 0; p < n; ++p) {
           const CollisionPoint& cp = g.collision_points[p];
           const Real t = point_t_[p];
@@ -140,7 +140,7 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
         }
         Real* u_bar = const_cast<Real*>(d.in("u_prev"));
         Real* vv_bar = const_cast<Real*>(d.in("v_prev"));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.node_count >= kParallelThreshold)
         for (int i = 0; i < g.node_count; ++i) {
           add3(u_bar, i, ops::gather_point_sum(x_bar.data(), point_t_.data(), g.node_point_offset.data(), g.node_point_entry.data(), i));
           add3(vv_bar, i, ops::gather_point_sum(v_bar.data(), point_t_.data(), g.node_point_offset.data(), g.node_point_entry.data(), i));
@@ -159,7 +159,7 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
         const Real* m = a.in("mass");
         const Vec3<Real> grav = load3(a.in("gravity"), 0);
         Real* corner_bar = const_cast<Real*>(d.in("corner_force"));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
         for (int e = 0; e < g.cell_count; ++e)
           for (int c = 0; c < 8; ++c) add3(corner_bar, 8 * e + c, load3(f_bar, g.cell_nodes[8 * e + c]));
         if (a.has_input("point_force")) {
@@ -188,7 +188,7 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
         const Real* y_bar = d.out("ku_corner");
         Real* rot_bar = const_cast<Real*>(d.in("rotation"));
         std::vector<Real> corner(corner_size), lb(g.cell_count), mb(g.cell_count);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
         for (int e = 0; e < g.cell_count; ++e) {
           Vec3<Real> pc[8], yb[8], pb[8];
           ops::load_cell_corners(u, g.cell_nodes.data(), e, pc);
@@ -215,7 +215,7 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
         const Real *m = a.in("mass"), *u = a.in("u_prev"), *v = a.in("v_prev"), *ku = a.in("ku_corner");
         const Real* r_bar = d.out("rhs");
         Real* ku_bar = const_cast<Real*>(d.in("ku_corner"));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
         for (int e = 0; e < g.cell_count; ++e)
           for (int k = 0; k < 8; ++k) add3(ku_bar, 8 * e + k, c.b_k * load3(r_bar, g.cell_nodes[8 * e + k]));
         Real *m_bar = const_cast<Real*>(d.in("mass")), *u_bar = const_cast<Real*>(d.in("u_prev"));
@@ -256,7 +256,7 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
         for (long i = 0; i < n; ++i) rhs_bar[i] += w[i];
         std::vector<Real> corner(corner_size), lb(g.cell_count), mb(g.cell_count), ku(corner_size);
         Real* rot_bar = const_cast<Real*>(d.in("rotation"));
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
         for (int e = 0; e < g.cell_count; ++e) {
           Vec3<Real> pc[8], yb[8], pb[8], y[8];
           ops::load_cell_corners(u, g.cell_nodes.data(), e, pc);

@@ -9,6 +9,10 @@
 
 namespace ssc {
 
+// Loops over fewer elements than this run on one thread: a parallel region costs more than
+// it saves on small grids, and busy-waiting threads stall badly on a loaded machine.
+constexpr long kParallelThreshold = 8192;
+
 struct PcgResult {
   int iterations = 0;
   double relative_residual = 0;
@@ -20,7 +24,7 @@ double deterministic_dot(const Real* a, const Real* b, long n) {
   constexpr long kBlock = 2048;
   const long blocks = (n + kBlock - 1) / kBlock;
   std::vector<double> partial(blocks, 0.0);
-#pragma omp parallel for schedule(static) if (blocks > 4)
+#pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
   for (long k = 0; k < blocks; ++k) {
     double s = 0;
     const long end = std::min(n, (k + 1) * kBlock);
@@ -45,7 +49,7 @@ PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b,
     return result;
   }
   apply(x, q.data());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
   for (long i = 0; i < n; ++i) {
     r[i] = b[i] - q[i];
     z[i] = inv_diag[i] * r[i];
@@ -63,7 +67,7 @@ PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b,
     apply(p.data(), q.data());
     const double pq = deterministic_dot(p.data(), q.data(), n);
     const Real step = Real(rz / pq);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
     for (long i = 0; i < n; ++i) {
       x[i] += step * p[i];
       r[i] -= step * q[i];
@@ -72,7 +76,7 @@ PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b,
     const double rz_next = deterministic_dot(r.data(), z.data(), n);
     const Real beta = Real(rz_next / rz);
     rz = rz_next;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
     for (long i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
     r_norm = std::sqrt(deterministic_dot(r.data(), r.data(), n));
     ++result.iterations;

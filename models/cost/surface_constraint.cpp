@@ -140,6 +140,18 @@ std::vector<SurfaceConstraintCost::Match> SurfaceConstraintCost::match_points(co
 
 FrameCost SurfaceConstraintCost::evaluate(const std::vector<Eigen::Vector3d>& points, double weight, const double* u,
                                           const double* band_u, double* u_bar, double* band_bar) const {
+  return evaluate_impl(points, nullptr, weight, u, band_u, u_bar, band_bar);
+}
+
+FrameCost SurfaceConstraintCost::evaluate_targets(const std::vector<Eigen::Vector3d>& points,
+                                                  const std::vector<double>& targets, double weight, const double* u,
+                                                  const double* band_u, double* u_bar, double* band_bar) const {
+  return evaluate_impl(points, &targets, weight, u, band_u, u_bar, band_bar);
+}
+
+FrameCost SurfaceConstraintCost::evaluate_impl(const std::vector<Eigen::Vector3d>& points,
+                                               const std::vector<double>* targets, double weight, const double* u,
+                                               const double* band_u, double* u_bar, double* band_bar) const {
   FrameCost r;
   r.points = int(points.size());
   if (points.empty()) return r;
@@ -150,12 +162,15 @@ FrameCost SurfaceConstraintCost::evaluate(const std::vector<Eigen::Vector3d>& po
   double sum = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     const Match& m = matches[i];
+    const bool targeted = targets != nullptr;
+    if (targeted && (m.cell < 0 || std::isnan((*targets)[i]))) continue;
     if (m.cell < 0) {
       sum += 0.5 * phi_max_ * phi_max_;
       continue;
     }
     ++r.matched;
-    sum += ops::surface_point_cost(m.phi, phi_max_);
+    const double residual = targeted ? m.phi - (*targets)[i] : 0.0;
+    sum += targeted ? 0.5 * residual * residual : ops::surface_point_cost(m.phi, phi_max_);
     if (!u_bar) continue;
     Vec3<double> X[8], X_bar[8];
     double phi[8];
@@ -165,7 +180,7 @@ FrameCost SurfaceConstraintCost::evaluate(const std::vector<Eigen::Vector3d>& po
       phi[k] = s.phi[n];
       X_bar[k] = zero3<double>();
     }
-    const double phi_bar = scale * ops::surface_point_cost_derivative(m.phi, phi_max_);
+    const double phi_bar = scale * (targeted ? residual : ops::surface_point_cost_derivative(m.phi, phi_max_));
     ops::adj_inverse_then_interpolate(X, make_vec3(m.a, m.b, m.c), phi, phi_bar, X_bar);
     for (int k = 0; k < 8; ++k) {
       const int kind = corners_[m.cell][k];

@@ -37,6 +37,11 @@ class SurfaceConstraintCost {
   FrameCost evaluate(const std::vector<Eigen::Vector3d>& points, double weight, const double* u, const double* band_u,
                      double* u_bar, double* band_bar) const;
 
+  // The J_SDF baseline: per point 1/2 (phi - target)^2, points unmatched (or with a NaN
+  // target) left out; normalised by the number of points like evaluate().
+  FrameCost evaluate_targets(const std::vector<Eigen::Vector3d>& points, const std::vector<double>& targets, double weight,
+                             const double* u, const double* band_u, double* u_bar, double* band_bar) const;
+
   // Rest-pose SDF value at the matched location of each point (NaN if unmatched);
   // for pictures and residual maps.
   std::vector<double> point_phi(const std::vector<Eigen::Vector3d>& points, const double* u, const double* band_u) const;
@@ -46,6 +51,8 @@ class SurfaceConstraintCost {
     int cell = -1;
     double a = 0, b = 0, c = 0, phi = 0;
   };
+  FrameCost evaluate_impl(const std::vector<Eigen::Vector3d>& points, const std::vector<double>* targets, double weight,
+                          const double* u, const double* band_u, double* u_bar, double* band_bar) const;
   std::vector<Match> match_points(const std::vector<Eigen::Vector3d>& points, const double* u, const double* band_u) const;
 
   const SimGrid& grid_;

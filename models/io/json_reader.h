@@ -48,7 +48,8 @@ class JsonReader {
 };
 
 // Applies "a.b.c=VALUE" (VALUE is JSON; a bare word is taken as a string) to a config.
-// Intermediate objects must exist unless the last key is new in an existing object.
+// Missing intermediate objects are created; the scene parser then rejects keys it does
+// not know, so a misspelt key is still reported.
 void apply_override(nlohmann::json& config, const std::string& assignment, const std::string& file);
 
 // Reads a JSON file; InputError with the parser's message and position on failure.

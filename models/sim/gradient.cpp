@@ -24,20 +24,32 @@ int choose_checkpoint_interval(const Simulation& sim, int steps, const GradientO
 std::vector<CostGradient> evaluate_cost_gradient(Simulation& sim, const SurfaceConstraintCost& cost,
                                                  const std::vector<ObservedFrame>& frames,
                                                  const GradientOptions& options) {
+  std::vector<int> steps;
+  for (const ObservedFrame& f : frames) steps.push_back(f.step);
+  return evaluate_trajectory_gradient(
+      sim, steps,
+      [&](size_t f, int, const double* u, const double* band, double* ub, double* bb) {
+        return cost.evaluate(frames[f].points, frames[f].weight, u, band, ub, bb);
+      },
+      options);
+}
+
+std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const std::vector<int>& frame_steps,
+                                                       const FrameCostFunction& cost, const GradientOptions& options) {
   const SimGrid& g = sim.grid();
   const TimestepGraph& tg = sim.timestep_graph();
   if (tg.band_u < 0) throw std::logic_error("evaluate_cost_gradient needs a simulation built with extension");
   const int B = sim.batch();
   int steps = 0;
   std::multimap<int, size_t> frames_at;
-  for (size_t f = 0; f < frames.size(); ++f) {
-    steps = std::max(steps, frames[f].step);
-    frames_at.emplace(frames[f].step, f);
+  for (size_t f = 0; f < frame_steps.size(); ++f) {
+    steps = std::max(steps, frame_steps[f]);
+    frames_at.emplace(frame_steps[f], f);
   }
   const int K = choose_checkpoint_interval(sim, steps, options);
 
   std::vector<CostGradient> results(B);
-  for (auto& r : results) r.frames.resize(frames.size());
+  for (auto& r : results) r.frames.resize(frame_steps.size());
   // seeds[b][step] for the frames' cotangents
   std::vector<std::map<int, FrameSeed>> seeds(B);
   std::vector<std::map<int, Simulation::State>> stored(B);
@@ -46,7 +58,6 @@ std::vector<CostGradient> evaluate_cost_gradient(Simulation& sim, const SurfaceC
     auto range = frames_at.equal_range(t);
     for (int b = 0; b < B; ++b)
       for (auto it = range.first; it != range.second; ++it) {
-        const ObservedFrame& f = frames[it->second];
         FrameSeed* seed = nullptr;
         if (options.gradient) {
           seed = &seeds[b][t];
@@ -55,8 +66,8 @@ std::vector<CostGradient> evaluate_cost_gradient(Simulation& sim, const SurfaceC
         }
         const std::vector<double> zero_band(t == 0 ? 3 * size_t(g.band_count) : 0, 0.0);
         const double* band = t == 0 ? zero_band.data() : sim.band_displacement(b);
-        const FrameCost fc = cost.evaluate(f.points, f.weight, sim.displacement(b), band,
-                                           seed ? seed->u_bar.data() : nullptr, seed ? seed->band_bar.data() : nullptr);
+        const FrameCost fc = cost(it->second, b, sim.displacement(b), band, seed ? seed->u_bar.data() : nullptr,
+                                  seed ? seed->band_bar.data() : nullptr);
         results[b].frames[it->second] = fc;
         results[b].cost += fc.cost;
       }

@@ -8,6 +8,7 @@
 // the initial velocity's gradient comes from the cotangent of v_0.
 #pragma once
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 
 #include "models/cost/surface_constraint.h"
@@ -46,5 +47,12 @@ struct GradientOptions {
 std::vector<CostGradient> evaluate_cost_gradient(Simulation& sim, const SurfaceConstraintCost& cost,
                                                  const std::vector<ObservedFrame>& frames,
                                                  const GradientOptions& options = {});
+
+// Any cost that is a sum of per-frame terms of the state: frame f at frame_steps[f]
+// returns its cost and, with non-null bars, adds its cotangents (active and band nodes).
+using FrameCostFunction = std::function<FrameCost(size_t frame, int batch_item, const double* u, const double* band_u,
+                                                  double* u_bar, double* band_bar)>;
+std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const std::vector<int>& frame_steps,
+                                                       const FrameCostFunction& cost, const GradientOptions& options = {});
 
 }  // namespace ssc

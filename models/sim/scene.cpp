@@ -119,7 +119,7 @@ void read_grid(const JsonReader& r, Scene& s) {
     s.cell_size = -res;  // resolved against the object's size when the body is built
   }
   if (s.object.kind == ObjectSpec::Kind::SdfFile && s.cell_size != 0)
-    r.fail("cell_size", "cannot be set for an sdf_file object: its grid is the file's");
+    r.fail(r.has("cell_size") ? "cell_size" : "resolution", "cannot be set for an sdf_file object: its grid is the file's");
   s.grid.band_width = r.integer("band_width", s.grid.band_width);
   s.grid.zero_cutoff = r.non_negative("zero_cutoff", r.number("zero_cutoff", s.grid.zero_cutoff));
   r.require(s.grid.zero_cutoff < 0.5, "zero_cutoff", "must be below 0.5 (it is a fraction of the cell size)");

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <fstream>
 
+#include "models/cost/baselines.h"
 #include "models/io/errors.h"
 #include "models/io/output_dir.h"
 #include "models/io/svg_plot.h"
@@ -39,7 +40,7 @@ SweepRange parse_range(const std::string& text) {
 
 Command register_sweep(CLI::App& app) {
   struct Options {
-    std::string scene, observations, param, out;
+    std::string scene, observations, param, out, cost = "ssc";
     std::vector<std::string> overrides;
     bool log = false;
     double phi_max = 0, truth = std::nan("");
@@ -54,6 +55,9 @@ Command register_sweep(CLI::App& app) {
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
   sub->add_option("--truth", o->truth, "Value to mark in the plot (e.g. the ground truth)");
   sub->add_flag("--log", o->log, "Sample logarithmically");
+  sub->add_option("--cost", o->cost, "ssc (default), or the baselines disp (known correspondences) and sdf (full SDF "
+                                     "difference), which simulate the truth from --truth")
+      ->check(CLI::IsMember({"ssc", "disp", "sdf"}));
   return [o] {
     SweepRange range = parse_range(o->param);
     if (o->log && (range.lo <= 0 || range.hi <= 0)) throw InputError("--log needs positive LO and HI");
@@ -62,6 +66,19 @@ Command register_sweep(CLI::App& app) {
     const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
     const PhysicalParameters base = sim.parameters(0);
     range.name = expand_parameter_names({range.name}, base).at(0);
+    std::vector<int> steps;
+    for (const ObservedFrame& f : problem.frames) steps.push_back(f.step);
+    FrameCostFunction frame_cost = [&](size_t f, int, const double* u, const double* band, double* ub, double* bb) {
+      return cost.evaluate(problem.frames[f].points, problem.frames[f].weight, u, band, ub, bb);
+    };
+    TrueTrajectory truth;
+    if (o->cost != "ssc") {
+      if (!std::isfinite(o->truth)) throw InputError("--cost " + o->cost + " needs --truth VALUE (it simulates the true trajectory)");
+      PhysicalParameters true_params = base;
+      set_parameter(true_params, range.name, o->truth);
+      truth = simulate_truth(problem.scene, problem.grid, true_params, steps, cost);
+      frame_cost = o->cost == "disp" ? displacement_cost(truth) : sdf_difference_cost(truth, cost);
+    }
     OutputDir out(o->out);
     std::vector<double> xs, costs, grads;
     Progress progress("sweep", range.count);
@@ -72,7 +89,7 @@ Command register_sweep(CLI::App& app) {
       PhysicalParameters p = base;
       set_parameter(p, range.name, x);
       sim.set_parameters(0, p);
-      const CostGradient r = evaluate_cost_gradient(sim, cost, problem.frames)[0];
+      const CostGradient r = evaluate_trajectory_gradient(sim, steps, frame_cost)[0];
       int points = 0, matched = 0;
       for (const FrameCost& f : r.frames) points += f.points, matched += f.matched;
       xs.push_back(x);
@@ -88,7 +105,8 @@ Command register_sweep(CLI::App& app) {
       if (!f) throw InputError(o->out + ": cannot write sweep.csv");
     }
     const std::string unit = parameter_unit(range.name);
-    PlotPanel cost_panel{"cost J_SSC", fmt::format("{} [{}]", range.name, unit), "cost", o->log, false, false, {}, {}};
+    const std::string cost_name = o->cost == "ssc" ? "J_SSC" : o->cost == "disp" ? "J_disp" : "J_SDF";
+    PlotPanel cost_panel{"cost " + cost_name, fmt::format("{} [{}]", range.name, unit), "cost", o->log, false, false, {}, {}};
     PlotPanel grad_panel{"dJ/d" + range.name, fmt::format("{} [{}]", range.name, unit), "gradient", o->log, false, true, {}, {}};
     if (std::isfinite(o->truth)) cost_panel.vertical_lines = grad_panel.vertical_lines = {o->truth};
     cost_panel.series.push_back({"", xs, costs, plot_color(0), 1.5, true});

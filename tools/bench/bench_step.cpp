@@ -1,0 +1,133 @@
+// Per-step benchmarks: forward and forward+adjoint steps on the CPU interpreter, and the
+// generated-kernel forward step on the GPU (when one is usable), for the torus, the
+// dragon and a teddy-sized body, single and batched. Figures go into docs/benchmarks.md.
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <memory>
+#include <string>
+
+#include "models/sim/body.h"
+#include "models/sim/deformed_surface.h"
+#include "models/sim/gradient.h"
+#include "models/sim/simulation.h"
+#include "runtime/cuda_runtime.h"
+
+namespace ssc {
+namespace {
+
+struct Body {
+  Scene scene;
+  SimGrid grid;
+};
+
+const char* kTeddyScene = R"({
+  "object": {"primitive": "sphere", "radius": 0.3, "position": [0, 0.4, 0]},
+  "grid": {"cell_size": 0.0445, "band_width": 0},
+  "material": {"youngs_modulus": 5000, "poisson_ratio": 0.45, "density": 100},
+  "ground": {"height": 0, "normal": [0, 1, 0], "stiffness": 1e5, "softmin_alpha": 50},
+  "time": {"dt": 0.01, "steps": 40}
+})";
+
+Body& body(const std::string& name) {
+  static std::map<std::string, std::unique_ptr<Body>> cache;
+  auto& b = cache[name];
+  if (!b) {
+    b = std::make_unique<Body>();
+    if (name == "teddy")
+      b->scene = parse_scene(nlohmann::json::parse(kTeddyScene), "teddy-sized sphere");
+    else
+      b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/" + name + ".json",
+                            {"grid.band_width=0"});
+    b->grid = build_body_grid(b->scene);
+  }
+  return *b;
+}
+
+void report_size(benchmark::State& state, const Body& b) {
+  state.counters["cells"] = b.grid.cell_count;
+  state.counters["nodes"] = b.grid.node_count;
+  state.counters["band"] = b.grid.band_count;
+}
+
+void BM_CpuForwardStep(benchmark::State& state, const std::string& name) {
+  Body& b = body(name);
+  Simulation sim(b.scene, b.grid, int(state.range(0)), false);
+  double cg = 0;
+  long steps = 0;
+  for (auto _ : state) {
+    if (sim.steps_taken() >= 40) sim.reset();
+    sim.step();
+    cg += sim.last_report().cg_iterations[0];
+    ++steps;
+  }
+  report_size(state, b);
+  state.counters["cg_iter"] = cg / double(steps);
+  state.counters["batch"] = double(state.range(0));
+}
+
+// Forward + adjoint of a 10-step J_SSC evaluation, per step.
+void BM_CpuGradientStep(benchmark::State& state, const std::string& name) {
+  Body& b = body(name);
+  Simulation sim(b.scene, b.grid, 1, true);
+  const DeformedSurface surface(b.grid);
+  ObservedFrame frame;
+  frame.step = 10;
+  {
+    Simulation ref(b.scene, b.grid, 1, false);
+    for (int i = 0; i < 10; ++i) ref.step();
+    const auto pos = surface.positions(ref.displacement(0));
+    for (size_t i = 0; i < pos.size(); i += 2) frame.points.push_back(pos[i]);
+  }
+  const SurfaceConstraintCost cost(b.grid, 2 * b.grid.h);
+  for (auto _ : state) benchmark::DoNotOptimize(evaluate_cost_gradient(sim, cost, {frame}));
+  state.SetItemsProcessed(state.iterations() * 10);  // steps
+  report_size(state, b);
+}
+
+void BM_GpuForwardStep(benchmark::State& state, const std::string& name, const std::string& real) {
+  const std::string why = gpu_unavailable_reason();
+  if (!why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  Body& b = body(name);
+  const int batch = int(state.range(0));
+  Simulation sim(b.scene, b.grid, batch, true);
+  for (int i = 0; i < 5; ++i) sim.step();  // a deformed, rotated state with contact
+  GpuOptions options;
+  options.real = real;
+  SolverOptions solver;
+  solver.cg_tolerance = b.scene.solver.tolerance;
+  solver.extension_tolerance = b.scene.solver.extension_tolerance;
+  GpuTimestep gpu(sim.timestep_graph().graph, b.grid, batch, solver, options);
+  gpu.upload(sim.interpreter().store());
+  for (auto _ : state) gpu.run();
+  report_size(state, b);
+  state.counters["cg_iter"] = gpu.cg_iterations().empty() ? 0 : gpu.cg_iterations()[0];
+  state.counters["batch"] = batch;
+  state.counters["compile_s"] = gpu.compile_seconds();
+}
+
+void register_all() {
+  for (const std::string name : {"torus", "dragon", "teddy"}) {
+    benchmark::RegisterBenchmark(("CpuForwardStep/" + name).c_str(), BM_CpuForwardStep, name)
+        ->Arg(1)->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(("CpuGradientStep/" + name).c_str(), BM_CpuGradientStep, name)
+        ->Unit(benchmark::kMillisecond);
+    for (const std::string real : {"double", "float"})
+      benchmark::RegisterBenchmark(("GpuForwardStep/" + name + "/" + real).c_str(), BM_GpuForwardStep, name, real)
+          ->Arg(1)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
+  }
+}
+
+}  // namespace
+}  // namespace ssc
+
+int main(int argc, char** argv) {
+  ssc::register_all();
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
