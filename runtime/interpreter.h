@@ -14,7 +14,7 @@ namespace ssc {
 struct SolverOptions {
   double cg_tolerance = 1e-8;        // relative residual of the time-step solve
   int cg_max_iterations = 2000;
-  double extension_tolerance = 1e-10;
+  double extension_tolerance = 1e-8;
   int extension_max_iterations = 5000;
 };
 
@@ -67,6 +67,7 @@ class Interpreter {
   std::vector<Real> point_t_;  // collision point edge parameters, in Real
   std::vector<Real> weights_;    // cut-cell volume weights, in Real
   std::vector<Real> node_rest_;  // rest positions of the active nodes, in Real
+  std::vector<std::vector<Real>> extension_adjoint_guess_;  // per batch item, warm start
 };
 
 extern template class Interpreter<double>;

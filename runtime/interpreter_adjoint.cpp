@@ -17,6 +17,7 @@ namespace ssc {
 
 template <class Real>
 void Interpreter<Real>::clear_adjoints(bool including_inputs) {
+  if (including_inputs) extension_adjoint_guess_.clear();  // a new backward pass
   for (size_t t = 0; t < graph_.tensors().size(); ++t)
     if (including_inputs || graph_.tensor(int(t)).role != TensorInfo::Role::Input)
       std::fill(adjoint_.all(int(t)).begin(), adjoint_.all(int(t)).end(), Real(0));
@@ -305,7 +306,10 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
       }
       case OpKind::ExtensionSolve: {
         const Real* x_bar = d.out("band_u");
-        std::vector<Real> y(3 * size_t(g.band_count), Real(0));
+        // Warm start from the previous (later) step's solution of this backward pass.
+        extension_adjoint_guess_.resize(batch());
+        std::vector<Real>& y = extension_adjoint_guess_[b];
+        y.resize(3 * size_t(g.band_count), Real(0));
         const PcgResult r = solve_band_laplacian(g, x_bar, y.data(), options_.extension_tolerance, options_.extension_max_iterations);
         if (!r.converged)
           throw SimulationError(fmt::format("the adjoint extension solve did not converge (batch item {})", b));

@@ -19,21 +19,27 @@ struct PcgResult {
   bool converged = false;
 };
 
+// Summed in blocks of kBlock, blocks added in order: the same bits serial or parallel.
 template <class Real>
 double deterministic_dot(const Real* a, const Real* b, long n) {
   constexpr long kBlock = 2048;
   const long blocks = (n + kBlock - 1) / kBlock;
-  std::vector<double> partial(blocks, 0.0);
-#pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
-  for (long k = 0; k < blocks; ++k) {
+  auto block_sum = [&](long k) {
     double s = 0;
     const long end = std::min(n, (k + 1) * kBlock);
     for (long i = k * kBlock; i < end; ++i) s += double(a[i]) * double(b[i]);
-    partial[k] = s;
+    return s;
+  };
+  double total = 0;
+  if (n < kParallelThreshold) {
+    for (long k = 0; k < blocks; ++k) total += block_sum(k);
+    return total;
   }
-  double s = 0;
-  for (double p : partial) s += p;
-  return s;
+  std::vector<double> partial(blocks, 0.0);
+#pragma omp parallel for schedule(static)
+  for (long k = 0; k < blocks; ++k) partial[k] = block_sum(k);
+  for (double p : partial) total += p;
+  return total;
 }
 
 // apply(p, Ap) computes the (SPD) operator; inv_diag is the Jacobi preconditioner.

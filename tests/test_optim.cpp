@@ -166,15 +166,36 @@ TEST(OptimScratch, Recon) {
   o.fit = {"youngs_modulus"};
   o.optimizer = optn;
   o.optimizer_options.max_iterations = its;
+  if (std::getenv("SEED")) { o.seed = std::atoi(std::getenv("SEED")); o.starts = std::atoi(std::getenv("NS")); } else
   for (double f : {0.3, 0.5, 0.9, 1.0, 1.1, 2.0, 4.0}) o.initial_values.push_back(Vec::Constant(1, 2e4 * f));
   ReconstructionResult r = reconstruct(p, o, [](int it, int active, double best, const Vec& x) {
-    std::printf("round %d active %d best %.6g x %.6g\n", it, active, best, x[0]);
+    if (std::getenv("HIST")) std::printf("round %d active %d best %.6g x %.6g\n", it, active, best, x[0]);
   });
   for (auto& s : r.starts) {
     std::printf("start %.4g -> %.6g cost %.6g its %d %s\n", s.initial[0], s.final[0], s.final_cost, s.iterations, s.stop_reason.c_str());
-    for (size_t k = 0; k < s.cost_history.size(); ++k) std::printf("   %zu %.6g %.8g\n", k, s.parameter_history[k][0], s.cost_history[k]);
+    if (std::getenv("HIST")) for (size_t k = 0; k < s.cost_history.size(); ++k) std::printf("   %zu %.6g %.8g\n", k, s.parameter_history[k][0], s.cost_history[k]);
   }
   std::printf("evals %d wall %.2f\n", r.evaluations, r.wall_seconds);
+}
+
+TEST(OptimScratch, Fail) {
+  Problem p = make_problem(sphere_scene(2e4, 0.08, 20, 32, 0.005));
+  for (double E : {1e3, 1e2, 10.0, 1.0, 1e-1, 1e-2, 1e-4, 1e-8, 1e9, 1e12}) {
+    PhysicalParameters q = PhysicalParameters::from_scene(p.scene);
+    q.youngs_modulus = E;
+    Simulation sim(p.scene, p.grid, 1, true);
+    sim.set_parameters(0, q);
+    try { for (int t = 0; t < 20; ++t) sim.step(); std::printf("E %g ok, cg its %d\n", E, sim.last_report().cg_iterations.empty() ? -1 : sim.last_report().cg_iterations[0]); }
+    catch (const SimulationError& e) { std::printf("E %g failed: %s\n", E, e.what()); }
+  }
+  for (double rho : {1e-2, 1e-4, 1e-6, 1e6}) {
+    PhysicalParameters q = PhysicalParameters::from_scene(p.scene);
+    q.density = rho;
+    Simulation sim(p.scene, p.grid, 1, true);
+    sim.set_parameters(0, q);
+    try { for (int t = 0; t < 20; ++t) sim.step(); std::printf("rho %g ok\n", rho); }
+    catch (const SimulationError& e) { std::printf("rho %g failed: %s\n", rho, e.what()); }
+  }
 }
 
 }  // namespace

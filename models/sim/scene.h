@@ -47,7 +47,7 @@ struct TimeSpec {
 struct SolverSpec {
   double tolerance = 1e-8;
   int max_iterations = 2000;
-  double extension_tolerance = 1e-10;
+  double extension_tolerance = 1e-8;
 };
 
 struct Scene {
