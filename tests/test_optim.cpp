@@ -949,7 +949,7 @@ TEST(ReconstructionEndToEnd, RecoversYoungsModulusWithin2Percent) {
   ReconstructionOptions o;
   o.fit = {"youngs_modulus"};
   o.starts = 4;
-  o.seed = 1;
+  o.seed = std::getenv("SEEDX") ? std::atoi(std::getenv("SEEDX")) : 1;
   o.optimizer = "rprop";
   o.optimizer_options.max_iterations = 25;
   const auto t0 = std::chrono::steady_clock::now();
@@ -972,7 +972,8 @@ TEST(ReconstructionEndToEnd, RecoversYoungsModulusWithin2Percent) {
     EXPECT_EQ(rec.stop_reason, "iteration limit");
     ASSERT_EQ(rec.cost_history.size(), 25u);  // R-Prop: one evaluation per iteration
     ASSERT_EQ(rec.parameter_history.size(), 25u);
-    EXPECT_TRUE(bitwise_equal(rec.parameter_history[0], rec.initial));
+    // The history is recorded in physical values, after the log/exp round trip.
+    EXPECT_NEAR(rec.parameter_history[0][0], rec.initial[0], 1e-13 * rec.initial[0]);
     EXPECT_EQ(rec.final_cost, *std::min_element(rec.cost_history.begin(), rec.cost_history.end()));
     EXPECT_LT(rec.final_cost, 0.5 * rec.cost_history[0]);
     EXPECT_LE(r.starts[r.best].final_cost, rec.final_cost);

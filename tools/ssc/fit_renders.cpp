@@ -71,10 +71,10 @@ std::vector<std::string> write_fit_renders(const OutputDir& out, const Problem& 
                          std::max(1.0, 0.3 * scale), residual_color(phi[i], problem.phi_max));
       ++shown;
     }
-    svg += fmt::format("<text x=\"6\" y=\"{:.0f}\">frame {} (step {}, t = {:.3f} s), camera {}: {} observed points; "
-                       "colour = |phi| from 0 (green) to phi_max = {:.3g} m (red), grey = unmatched</text>\n</svg>\n",
-                       cam.height * scale + 24, f, frame.step, frame.step * problem.scene.time.dt, cam.name, shown,
-                       problem.phi_max);
+    svg += fmt::format("<text x=\"6\" y=\"{:.0f}\">frame {} (step {}, t = {:.3f} s), camera {}: {} observed points</text>\n"
+                       "<text x=\"6\" y=\"{:.0f}\">colour: |phi| from 0 (green) to phi_max = {:.3g} m (red), grey: unmatched</text>\n</svg>\n",
+                       cam.height * scale + 16, f, frame.step, frame.step * problem.scene.time.dt, cam.name, shown,
+                       cam.height * scale + 32, problem.phi_max);
     const std::string name = fmt::format("fit_frame_{:04d}.svg", f);
     std::ofstream file(out.file(name));
     file << svg;
