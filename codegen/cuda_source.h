@@ -4,7 +4,9 @@
 //      messages and line info point into the real headers), and small load/store helpers;
 //   2. one `extern "C" __global__` kernel: thread (blockIdx.x * blockDim.x + threadIdx.x)
 //      of batch item blockIdx.y loads through batch-offset pointers, runs the fused op
-//      fragments in order, and stores its own outputs. No atomics.
+//      fragments in order, and stores its own outputs. Extent::Item kernels instead run
+//      one block of SSC_ITEM threads per batch item (i = threadIdx.x) that reduce with
+//      gen::block_sum (a fixed shuffle/shared-memory tree). No atomics.
 // Only structure is baked in (op list, Real, block size); every run-time value (material,
 // dt, theta, planes, tolerances, sizes) is a kernel parameter.
 #pragma once
@@ -17,6 +19,7 @@ namespace ssc {
 struct CodegenOptions {
   std::string real = "double";  // "double" or "float"
   int block_size = 128;
+  int item_block = kItemBlock;  // threads of an Extent::Item kernel (SSC_ITEM)
 };
 
 // The shared prelude (headers and helpers).

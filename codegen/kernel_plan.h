@@ -7,8 +7,8 @@
 //   - gather of a buffer written in this kernel (read-after-write across threads), or a
 //     write of a buffer the kernel gathers (write-after-read across threads);
 //   - opaque op: NewmarkSolve and ExtensionSolve become solver sequences of their own
-//     kernels (element apply, node gather, ordered dot-product chunks, scalar updates,
-//     axpy updates) that the runtime drives in a loop;
+//     kernels (element apply, node gather, and per CG iteration one block-per-item
+//     kernel: fixed-order dot products, scalars, axpys) that the runtime drives in a loop;
 //   - reduction: an ordered (deterministic) sum into scalars is a kernel of its own.
 // Every element-to-node transfer is a node-side gather over the incidence lists, so no
 // kernel uses atomics. Kernel names are readable and carry a hash of their generated

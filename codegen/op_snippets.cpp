@@ -19,7 +19,7 @@ const char* extent_name(Extent e) {
     case Extent::Point: return "point";
     case Extent::Band: return "band";
     case Extent::Len: return "vec";
-    case Extent::LenChunks: return "chunk";
+    case Extent::Item: return "item";
   }
   return "?";
 }
@@ -183,16 +183,19 @@ Builder& newmark_scalars(Builder& b) { return b.t("dt").t("theta").t("mass_dampi
 
 // The Jacobi-PCG kernels shared by every solve (vectors of length len per batch item).
 // Solver state s_cg (double, 16 per batch item): 0 |b|, 1 r.z, 2 |r|, 3 p.q, 4 step,
-// 5 beta, 6 active, 7 iterations, 8 relative residual, 9 converged, 10 stepping.
+// 5 beta, 6 active, 7 iterations, 8 relative residual, 9 converged.
+//
+// Both kernels run one block of SSC_ITEM threads per batch item (Extent::Item): every
+// thread walks a fixed strided subset of the vector (k = i, i + SSC_ITEM, ...), its
+// partial dot products are combined by gen::block_sum in a fixed tree (runtime order
+// independent: bitwise reproducible, no atomics), and every thread gets the totals, so
+// the scalar update, the axpys and the direction update run in the same launch. One CG
+// iteration is then the operator's apply kernels plus pcg_iterate. When an item has
+// stopped (state 6 == 0), pcg_iterate and the gated apply kernels return at once.
 std::vector<Snippet> pcg_snippets(const Graph& g, int op) {
   auto B = [&](const char* label, Extent e) { return Builder(g, op, label, e); };
   auto state = [](Builder& b, bool write) -> Builder& {
     return b.scratch("cg", "cg", "double", Domain::Scalar, 16, write);
-  };
-  // Dot-product chunks: 4 slots of ceil(len / 2048) partial sums per batch item.
-  auto partial = [](Builder& b, bool write) -> Builder& {
-    return b.value("len", "int").scratch("partial", "partial", "double", Domain::Scalar, 4, write,
-                                         false, "4 * ((len + 2047) / 2048)");
   };
   const char* check =
       "if ($cg[0] == 0.0) { $cg[6] = 0; $cg[9] = 1; $cg[8] = 0; }\n"
@@ -204,98 +207,69 @@ std::vector<Snippet> pcg_snippets(const Graph& g, int op) {
       "}\n";
   std::vector<Snippet> s;
   {
-    Builder b = B("pcg_dot", Extent::LenChunks);
-    b.vec("x", false, "len").vec("y", false, "len").value("slot", "int");
-    partial(b, true).stage("ordered dot-product chunks (fixed order, double)", true);
-    s.push_back(b.code(
-        "const int n_chunks = (len + 2047) / 2048;\n"
-        "const int end = min(len, (i + 1) * 2048);\n"
-        "double sum = 0;\n"
-        "for (int k = i * 2048; k < end; ++k) sum += double(v_x[k]) * double(v_y[k]);\n"
-        "$partial[slot * n_chunks + i] = sum;\n"));
-  }
-  {
-    Builder b = B("pcg_norm_b", Extent::One);
-    partial(b, false);
-    state(b, true).stage("|b| from the chunks", true);
-    s.push_back(b.code(
-        "const int n_chunks = (len + 2047) / 2048;\n"
-        "double sum = 0;\n"
-        "for (int k = 0; k < n_chunks; ++k) sum += $partial[k];\n"
-        "for (int k = 0; k < 16; ++k) $cg[k] = 0;\n"
-        "$cg[0] = sqrt(sum);\n"));
-  }
-  {
-    Builder b = B("pcg_start", Extent::Len);
+    Builder b = B("pcg_start", Extent::Item);
     b.vec("x", true, "len").vec("b", false, "len").vec("q", false, "len").vec("inv_diag", false, "len");
     b.vec("r", true, "len").vec("z", true, "len").vec("p", true, "len").value("len", "int");
-    state(b, false).stage("r = b - A x, z = M^-1 r, p = z", true);
-    s.push_back(b.code(
-        "if ($cg[0] == 0.0) v_x[i] = Real(0);\n"
-        "v_r[i] = v_b[i] - v_q[i];\n"
-        "v_z[i] = v_inv_diag[i] * v_r[i];\n"
-        "v_p[i] = v_z[i];\n"));
-  }
-  {
-    Builder b = B("pcg_scalars_start", Extent::One);
-    partial(b, false).value("tol", "double").value("max_it", "int");
-    state(b, true).stage("r.z, |r|, convergence test", true);
+    b.value("tol", "double").value("max_it", "int");
+    state(b, true).stage("|b|, r = b - A x, z = M^-1 r, p = z, r.z, |r|, convergence test (block per item)", true);
     s.push_back(b.code(std::string(
-        "const int n_chunks = (len + 2047) / 2048;\n"
-        "double rz = 0, rr = 0;\n"
-        "for (int k = 0; k < n_chunks; ++k) rz += $partial[k];\n"
-        "for (int k = 0; k < n_chunks; ++k) rr += $partial[n_chunks + k];\n"
-        "$cg[1] = rz;\n"
-        "$cg[2] = sqrt(rr);\n"
-        "$cg[7] = 0;\n") + check));
+        "double acc[3] = {0, 0, 0};\n"
+        "for (int k = i; k < len; k += SSC_ITEM) {\n"
+        "  const Real bk = v_b[k];\n"
+        "  const Real rk = bk - v_q[k];\n"
+        "  const Real zk = v_inv_diag[k] * rk;\n"
+        "  v_r[k] = rk;\n"
+        "  v_z[k] = zk;\n"
+        "  v_p[k] = zk;\n"
+        "  acc[0] += double(bk) * double(bk);\n"
+        "  acc[1] += double(rk) * double(zk);\n"
+        "  acc[2] += double(rk) * double(rk);\n"
+        "}\n"
+        "gen::block_sum<3>(acc);\n"
+        "const double b_norm = sqrt(acc[0]);\n"
+        "if (b_norm == 0.0)\n"
+        "  for (int k = i; k < len; k += SSC_ITEM) v_x[k] = Real(0);\n"
+        "if (i == 0) {\n"
+        "  for (int k = 0; k < 16; ++k) $cg[k] = 0;\n"
+        "  $cg[0] = b_norm;\n"
+        "  $cg[1] = acc[1];\n"
+        "  $cg[2] = sqrt(acc[2]);\n") + check + "}\n"));
   }
   {
-    Builder b = B("pcg_scalars_step", Extent::One);
-    partial(b, false);
-    state(b, true).stage("loop: step = r.z / p.q", true);
-    s.push_back(b.code(
-        "const int n_chunks = (len + 2047) / 2048;\n"
-        "$cg[10] = $cg[6];\n"
-        "if ($cg[6] != 0.0) {\n"
-        "  double pq = 0;\n"
-        "  for (int k = 0; k < n_chunks; ++k) pq += $partial[k];\n"
-        "  $cg[3] = pq;\n"
-        "  $cg[4] = double(Real($cg[1] / pq));\n"
-        "}\n"));
-  }
-  {
-    Builder b = B("pcg_update", Extent::Len);
-    b.vec("x", true, "len").vec("r", true, "len").vec("z", true, "len").vec("p", false, "len");
+    Builder b = B("pcg_iterate", Extent::Item);
+    b.vec("x", true, "len").vec("r", true, "len").vec("z", true, "len").vec("p", true, "len");
     b.vec("q", false, "len").vec("inv_diag", false, "len").value("len", "int");
-    state(b, false).stage("loop: x += step p, r -= step q, z = M^-1 r", true);
-    s.push_back(b.code(
-        "if ($cg[10] != 0.0) {\n"
-        "  const Real step = Real($cg[4]);\n"
-        "  v_x[i] += step * v_p[i];\n"
-        "  v_r[i] -= step * v_q[i];\n"
-        "  v_z[i] = v_inv_diag[i] * v_r[i];\n"
-        "}\n"));
-  }
-  {
-    Builder b = B("pcg_scalars_end", Extent::One);
-    partial(b, false).value("tol", "double").value("max_it", "int");
-    state(b, true).stage("loop: beta, |r|, iteration count, convergence test", true);
+    b.value("tol", "double").value("max_it", "int");
+    state(b, true).stage(
+        "loop: p.q, step, x += step p, r -= step q, z = M^-1 r, r.z, |r|, beta, p = z + beta p, "
+        "convergence test (block per item)", true);
     s.push_back(b.code(std::string(
-        "const int n_chunks = (len + 2047) / 2048;\n"
-        "if ($cg[10] != 0.0) {\n"
-        "  double rz = 0, rr = 0;\n"
-        "  for (int k = 0; k < n_chunks; ++k) rz += $partial[k];\n"
-        "  for (int k = 0; k < n_chunks; ++k) rr += $partial[n_chunks + k];\n"
-        "  $cg[5] = double(Real(rz / $cg[1]));\n"
-        "  $cg[1] = rz;\n"
-        "  $cg[2] = sqrt(rr);\n"
+        "if ($cg[6] == 0.0) return;  // stopped (uniform over the block)\n"
+        "const double rz = $cg[1];\n"
+        "double pq[1] = {0};\n"
+        "for (int k = i; k < len; k += SSC_ITEM) pq[0] += double(v_p[k]) * double(v_q[k]);\n"
+        "gen::block_sum<1>(pq);\n"
+        "const Real step = Real(rz / pq[0]);\n"
+        "double acc[2] = {0, 0};\n"
+        "for (int k = i; k < len; k += SSC_ITEM) {\n"
+        "  v_x[k] += step * v_p[k];\n"
+        "  const Real rk = v_r[k] - step * v_q[k];\n"
+        "  const Real zk = v_inv_diag[k] * rk;\n"
+        "  v_r[k] = rk;\n"
+        "  v_z[k] = zk;\n"
+        "  acc[0] += double(rk) * double(zk);\n"
+        "  acc[1] += double(rk) * double(rk);\n"
+        "}\n"
+        "gen::block_sum<2>(acc);\n"
+        "const Real beta = Real(acc[0] / rz);\n"
+        "for (int k = i; k < len; k += SSC_ITEM) v_p[k] = v_z[k] + beta * v_p[k];\n"
+        "if (i == 0) {\n"
+        "  $cg[3] = pq[0];\n"
+        "  $cg[4] = double(step);\n"
+        "  $cg[5] = double(beta);\n"
+        "  $cg[1] = acc[0];\n"
+        "  $cg[2] = sqrt(acc[1]);\n"
         "  $cg[7] += 1;\n") + check + "}\n"));
-  }
-  {
-    Builder b = B("pcg_direction", Extent::Len);
-    b.vec("p", true, "len").vec("z", false, "len").value("len", "int");
-    state(b, false).stage("loop: p = z + beta p", true);
-    s.push_back(b.code("if ($cg[10] != 0.0) v_p[i] = v_z[i] + Real($cg[5]) * v_p[i];\n"));
   }
   return s;
 }
@@ -339,8 +313,10 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
     Builder b(g, op, "newmark_apply_cell", Extent::Cell);
     b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
     b.vec("p", false, x3, true).scratch("corner", "corner", "Real", Domain::Cell, 24, true);
+    b.value("gate", "int").scratch("cg", "cg", "double", Domain::Scalar, 16, false);
     b.stage("loop: element apply R K R^T p per cell corner", true);
     s.push_back(b.code(
+        "if (gate != 0 && $cg[6] == 0.0) return;  // solve stopped for this item\n"
         "Vec3<Real> pc[8], y[8];\n"
         "ops::load_cell_corners(v_p, g_cell_nodes, i, pc);\n"
         "ops::corotated_apply(gen::load_mat3($rotation, i), g_cell_weights + 8 * i, $lambda[0], $mu[0], h, pc, y);\n"
@@ -350,8 +326,10 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
     Builder b(g, op, "newmark_apply_node", Extent::Node);
     newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
     b.scratch("corner", "corner", "Real", Domain::Cell, 24, false, true).vec("p", false, x3).vec("q", true, x3);
+    b.value("gate", "int").scratch("cg", "cg", "double", Domain::Scalar, 16, false);
     b.stage("loop: node gather, q = (a_m M + a_k K) p", true);
-    s.push_back(b.code(std::string(kCoefficients) +
+    s.push_back(b.code("if (gate != 0 && $cg[6] == 0.0) return;  // solve stopped for this item\n" +
+        std::string(kCoefficients) +
         "const Vec3<Real> kp = ops::gather_corner_sum($corner, g_node_cell_offset, g_node_cell_entry, i);\n"
         "store3(v_q, i, $fixed[i] != Real(0) ? load3(v_p, i) : ops::newmark_system_apply(c, $mass[i], load3(v_p, i), kp));\n"));
   }
@@ -391,8 +369,10 @@ std::vector<Snippet> extension_solver(const Graph& g, int op, bool adjoint) {
   {
     Builder b(g, op, "extension_apply", Extent::Band);
     b.grid("band_neighbors", "int").grid("band_degree", "int").vec("p", false, x3, true).vec("q", true, x3);
+    b.value("gate", "int").scratch("cg", "cg", "double", Domain::Scalar, 16, false);
     b.stage("loop: band Laplacian q = L p", true);
     s.push_back(b.code(
+        "if (gate != 0 && $cg[6] == 0.0) return;  // solve stopped for this item\n"
         "Vec3<Real> s = Real(g_band_degree[i]) * load3(v_p, i);\n"
         "for (int d = 0; d < 6; ++d) {\n"
         "  const int nb = g_band_neighbors[6 * i + d];\n"

@@ -2,8 +2,8 @@
 // of its forward (and, separately, its adjoint) for one index of its domain, written as
 // calls into the op headers of ops/ (the same functions the CPU interpreter loops), plus
 // the parameters the fragment binds. Opaque ops (NewmarkSolve, ExtensionSolve) are split
-// into solver stages: element apply over cells, node gathers, ordered dot-product
-// chunks, scalar updates and axpy kernels (runtime/cuda_runtime.cpp drives them).
+// into solver stages: element apply over cells, node gathers and two block-per-item PCG
+// kernels with fixed-order reductions (runtime/cuda_runtime.cpp drives them).
 //
 // Conventions inside a fragment: `i` is the index in the domain, `b` the batch item,
 // `h` the cell size; tensors are bound as t_<tensor> (values) and a_<tensor>
@@ -18,12 +18,14 @@
 
 namespace ssc {
 
-// How many threads (per batch item) a kernel runs.
-enum class Extent { One, Cell, Node, Point, Band, Len, LenChunks };
+// How many threads (per batch item) a kernel runs. Item: one block of SSC_ITEM threads
+// per batch item that cooperates (strided loops over the item's vectors, fixed-order
+// block reductions); its fragments see i = threadIdx.x.
+enum class Extent { One, Cell, Node, Point, Band, Len, Item };
 const char* extent_name(Extent e);
 Domain extent_domain(Extent e);
 
-constexpr int kDotChunk = 2048;  // entries per dot-product chunk (runtime/pcg.h uses the same)
+constexpr int kItemBlock = 1024;  // threads of an Extent::Item block (SSC_ITEM)
 constexpr int kMaxPlaneBars = 32;  // 4 cotangent values x ops::kMaxGroundPlanes
 
 struct KernelParam {

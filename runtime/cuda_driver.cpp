@@ -6,6 +6,7 @@
 
 #include <mutex>
 #include <stdexcept>
+#include <type_traits>
 
 namespace ssc {
 namespace cu {
@@ -48,6 +49,16 @@ Loaded load() {
                    bind(lib, d.LaunchKernel, "cuLaunchKernel", w) && bind(lib, d.GetErrorString, "cuGetErrorString", w) &&
                    bind(lib, d.DriverGetVersion, "cuDriverGetVersion", w);
   if (!all) return l;
+  // Optional entry points (graphs): left null when absent.
+  auto opt = [&](auto& f, const char* name) { f = reinterpret_cast<std::remove_reference_t<decltype(f)>>(dlsym(lib, name)); };
+  opt(d.StreamCreate, "cuStreamCreate");
+  opt(d.StreamDestroy, "cuStreamDestroy_v2");
+  opt(d.StreamBeginCapture, "cuStreamBeginCapture_v2");
+  opt(d.StreamEndCapture, "cuStreamEndCapture");
+  opt(d.GraphInstantiate, "cuGraphInstantiateWithFlags");
+  opt(d.GraphLaunch, "cuGraphLaunch");
+  opt(d.GraphExecDestroy, "cuGraphExecDestroy");
+  opt(d.GraphDestroy, "cuGraphDestroy");
   if (const Result r = d.Init(0); r != 0) {
     const char* s = nullptr;
     d.GetErrorString(r, &s);

@@ -16,6 +16,8 @@ using Module = struct CUmod_st*;
 using Function = struct CUfunc_st*;
 using Stream = struct CUstream_st*;
 using DevicePtr = unsigned long long;
+using Graph = struct CUgraph_st*;
+using GraphExec = struct CUgraphExec_st*;
 
 struct Driver {
   Result (*Init)(unsigned);
@@ -40,7 +42,24 @@ struct Driver {
                          void**, void**);
   Result (*GetErrorString)(Result, const char**);
   Result (*DriverGetVersion)(int*);
+  // Streams and graphs (stream capture): optional, nullptr when the driver lacks them
+  // (the runtime then launches every kernel directly).
+  Result (*StreamCreate)(Stream*, unsigned);
+  Result (*StreamDestroy)(Stream);
+  Result (*StreamBeginCapture)(Stream, int);
+  Result (*StreamEndCapture)(Stream, Graph*);
+  Result (*GraphInstantiate)(GraphExec*, Graph, unsigned long long);
+  Result (*GraphLaunch)(GraphExec, Stream);
+  Result (*GraphExecDestroy)(GraphExec);
+  Result (*GraphDestroy)(Graph);
+  bool has_graphs() const {
+    return StreamCreate && StreamDestroy && StreamBeginCapture && StreamEndCapture && GraphInstantiate && GraphLaunch &&
+           GraphExecDestroy && GraphDestroy;
+  }
 };
+
+constexpr unsigned kStreamNonBlocking = 1;   // CU_STREAM_NON_BLOCKING
+constexpr int kCaptureModeThreadLocal = 1;   // CU_STREAM_CAPTURE_MODE_THREAD_LOCAL
 
 // Attribute ids (cuda.h values).
 constexpr int kAttrComputeCapabilityMajor = 75, kAttrComputeCapabilityMinor = 76;

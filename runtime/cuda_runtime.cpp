@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <functional>
 
@@ -39,6 +40,19 @@ std::string gpu_description() {
 namespace {
 
 constexpr int kBlock = 128;
+
+// A kernel launch with its argument slots (each argument in 8 bytes).
+struct Pending {
+  const PlannedKernel* kernel = nullptr;
+  cu::Function function = nullptr;
+  unsigned grid_x = 1, grid_y = 1, block = kBlock;
+  std::vector<unsigned long long> slots;
+};
+
+bool graphs_disabled_by_env() {
+  const char* e = std::getenv("SSC_GPU_GRAPHS");
+  return e && std::string(e) == "0";
+}
 
 struct Buffer {
   cu::DevicePtr ptr = 0;
@@ -75,6 +89,18 @@ struct GpuTimestep::Impl {
   std::vector<int> cg_iterations;
   std::map<std::string, GpuKernelTiming> timing;
   double compile_s = 0;
+  // Launch segments between host checks of the solver state. With graphs, each segment
+  // is captured once (stream capture) under its tag and replayed afterwards: the launch
+  // sequence of a tag never depends on device data, only on the plan and the bindings,
+  // which are fixed for this object.
+  bool use_graphs = false;
+  cu::Stream capture_stream = nullptr;
+  std::map<std::string, cu::GraphExec> graph_execs;
+  std::vector<cu::Graph> graph_list;
+  std::string segment_tag;
+  bool replaying = false;  // the open segment has a graph: launches are not recorded
+  std::vector<Pending> pending;
+  int segment_count = 0;
 
   Impl(const Graph& g, const SimGrid& gr, int b, const SolverOptions& s, const GpuOptions& o)
       : graph(g), grid(gr), batch(b), solver(s), options(o) {}
@@ -85,6 +111,9 @@ struct GpuTimestep::Impl {
     for (Buffer& x : tensors) d->MemFree(x.ptr);
     for (auto& [n, x] : grid_buffers) d->MemFree(x.ptr);
     for (auto& [n, x] : scratch) d->MemFree(x.ptr);
+    for (auto& [n, e] : graph_execs) d->GraphExecDestroy(e);
+    for (cu::Graph g : graph_list) d->GraphDestroy(g);
+    if (capture_stream) d->StreamDestroy(capture_stream);
     for (auto& [n, m] : modules) d->ModuleUnload(m);
     d->DevicePrimaryCtxRelease(device);
   }
@@ -214,10 +243,12 @@ struct GpuTimestep::Impl {
           need[p.name] = std::max(need[p.name], size_t(batch) * count(p.domain) * p.components * elem);
         }
     const size_t len_max = 3 * size_t(std::max(sizes.node, sizes.band));
-    need["s_partial"] = size_t(batch) * 4 * ((len_max + kDotChunk - 1) / kDotChunk + 1) * 8;
     for (const char* v : {"v_r", "v_z", "v_p", "v_q", "v_b", "v_inv_diag"}) need[v] = size_t(batch) * len_max * real_size;
     for (auto& [n, bytes] : need) scratch[n] = alloc(bytes);
     cg_iterations.assign(batch, 0);
+    use_graphs = options.graphs && !options.profile && !graphs_disabled_by_env() && d->has_graphs() &&
+                 d->StreamCreate(&capture_stream, cu::kStreamNonBlocking) == 0;
+    if (!use_graphs) capture_stream = nullptr;
   }
 
   size_t extent_count(Extent e, long len) const {
@@ -228,15 +259,19 @@ struct GpuTimestep::Impl {
       case Extent::Point: return sizes.point;
       case Extent::Band: return sizes.band;
       case Extent::Len: return size_t(len);
-      case Extent::LenChunks: return size_t((len + kDotChunk - 1) / kDotChunk);
+      case Extent::Item: return 1;
     }
     return 0;
   }
 
   void launch(const PlannedKernel& k, const Call& call = {}) {
+    if (replaying) return;  // the open segment is replayed from its graph
     const size_t n = extent_count(k.extent, call.len);
     if (n == 0 || batch == 0) return;
-    std::vector<unsigned long long> slots;
+    Pending pl;
+    pl.kernel = &k;
+    pl.function = functions.at(k.name);
+    std::vector<unsigned long long>& slots = pl.slots;
     slots.reserve(8 + k.params.size());
     auto put_int = [&](long v) {
       unsigned long long s = 0;
@@ -296,21 +331,72 @@ struct GpuTimestep::Impl {
         }
       }
     }
+    if (k.extent == Extent::Item) {
+      pl.grid_x = 1;
+      pl.block = kItemBlock;
+    } else {
+      pl.grid_x = unsigned((n + kBlock - 1) / kBlock);
+      pl.block = kBlock;
+    }
+    pl.grid_y = unsigned(batch);
+    if (use_graphs)
+      pending.push_back(std::move(pl));
+    else
+      submit(pl, nullptr);
+  }
+
+  void submit(Pending& pl, cu::Stream stream) {
     std::vector<void*> args;
-    for (unsigned long long& s : slots) args.push_back(&s);
-    const unsigned blocks = unsigned((n + kBlock - 1) / kBlock);
+    args.reserve(pl.slots.size());
+    for (unsigned long long& s : pl.slots) args.push_back(&s);
+    const std::string& name = pl.kernel->name;
     const auto start = std::chrono::steady_clock::now();
-    cu::check(d->LaunchKernel(functions.at(k.name), blocks, unsigned(batch), 1, kBlock, 1, 1, 0, nullptr, args.data(),
-                              nullptr),
-              ("cuLaunchKernel " + k.name).c_str());
+    cu::check(d->LaunchKernel(pl.function, pl.grid_x, pl.grid_y, 1, pl.block, 1, 1, 0, stream, args.data(), nullptr),
+              ("cuLaunchKernel " + name).c_str());
     if (options.profile) {
-      cu::check(d->CtxSynchronize(), ("kernel " + k.name).c_str());
-      GpuKernelTiming& t = timing[k.name];
-      t.name = k.name;
+      cu::check(d->CtxSynchronize(), ("kernel " + name).c_str());
+      GpuKernelTiming& t = timing[name];
+      t.name = name;
       t.launches++;
       t.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-      t.registers = registers[k.name];
+      t.registers = registers[name];
     }
+  }
+
+  // Opens a launch segment named `tag` (graphs only): if it was captured before, the
+  // launches until close_segment() are skipped and the graph is replayed instead.
+  void open_segment(const std::string& tag) {
+    if (!use_graphs) return;
+    segment_tag = tag;
+    replaying = graph_execs.count(tag) != 0;
+    pending.clear();
+  }
+  bool recording() const { return !replaying; }
+
+  // Submits the open segment (on the legacy stream, ordered with the copies).
+  void close_segment() {
+    if (!use_graphs) return;
+    if (!replaying && !pending.empty()) {
+      cu::Graph graph = nullptr;
+      cu::check(d->StreamBeginCapture(capture_stream, cu::kCaptureModeThreadLocal), "cuStreamBeginCapture");
+      try {
+        for (Pending& pl : pending) submit(pl, capture_stream);
+      } catch (...) {
+        d->StreamEndCapture(capture_stream, &graph);
+        if (graph) d->GraphDestroy(graph);
+        pending.clear();
+        throw;
+      }
+      cu::check(d->StreamEndCapture(capture_stream, &graph), "cuStreamEndCapture");
+      graph_list.push_back(graph);
+      cu::GraphExec exec = nullptr;
+      cu::check(d->GraphInstantiate(&exec, graph, 0), "cuGraphInstantiate");
+      graph_execs[segment_tag] = exec;
+    }
+    auto it = graph_execs.find(segment_tag);
+    if (it != graph_execs.end()) cu::check(d->GraphLaunch(it->second, nullptr), "cuGraphLaunch");
+    pending.clear();
+    replaying = false;
   }
 
   const PlannedKernel& kernel(const std::string& label) const {
@@ -326,47 +412,40 @@ struct GpuTimestep::Impl {
   }
 
   // Jacobi-PCG on x (length len per batch item) with b and inv_diag already in v_b,
-  // v_inv_diag; apply(p, q) launches q = A p. Returns the iterations per batch item.
-  std::vector<int> pcg(cu::DevicePtr x, long len, double tol, int max_it, const std::function<void(cu::DevicePtr, cu::DevicePtr)>& apply,
-                       const char* what) {
+  // v_inv_diag; apply(p, q, gate) launches q = A p (gate != 0: skipped for items whose
+  // solve has stopped). Per iteration: the apply kernels and one block-per-item
+  // pcg_iterate. The host reads the solver state every check_every iterations; the
+  // iterations in between form one graph segment (`tag`). Returns the iterations per item.
+  std::vector<int> pcg(cu::DevicePtr x, long len, double tol, int max_it,
+                       const std::function<void(cu::DevicePtr, cu::DevicePtr, int)>& apply, const char* what,
+                       const std::string& tag) {
     Call c;
     c.len = len;
     c.values = {{"tol", tol}, {"max_it", double(max_it)}};
     const cu::DevicePtr r = scratch.at("v_r").ptr, z = scratch.at("v_z").ptr, p = scratch.at("v_p").ptr,
                         q = scratch.at("v_q").ptr, b = scratch.at("v_b").ptr, inv = scratch.at("v_inv_diag").ptr;
     c.vectors = {{"v_x", x}, {"v_b", b}, {"v_r", r}, {"v_z", z}, {"v_p", p}, {"v_q", q}, {"v_inv_diag", inv}};
-    auto dot = [&](cu::DevicePtr u, cu::DevicePtr w, int slot) {
-      Call dc = c;
-      dc.vectors["v_x"] = u;
-      dc.vectors["v_y"] = w;
-      dc.values["slot"] = slot;
-      launch(kernel("pcg_dot"), dc);
-    };
-    dot(b, b, 0);
-    launch(kernel("pcg_norm_b"), c);
-    apply(x, q);
-    launch(kernel("pcg_start"), c);
-    dot(r, z, 0);
-    dot(r, r, 1);
-    launch(kernel("pcg_scalars_start"), c);
-    const int check_every = std::max(1, options.check_every);
-    for (int it = 0;; ++it) {
-      if (it % check_every == 0) {
-        const std::vector<double> s = solver_state();
-        bool any = false;
-        for (int k = 0; k < batch; ++k) any |= s[16 * k + 6] != 0.0;
-        if (!any || it > max_it + check_every) break;
-      }
-      apply(p, q);
-      dot(p, q, 0);
-      launch(kernel("pcg_scalars_step"), c);
-      launch(kernel("pcg_update"), c);
-      dot(r, z, 0);
-      dot(r, r, 1);
-      launch(kernel("pcg_scalars_end"), c);
-      launch(kernel("pcg_direction"), c);
+    const PlannedKernel& iterate = kernel("pcg_iterate");
+    if (recording()) {
+      apply(x, q, 0);
+      launch(kernel("pcg_start"), c);
     }
-    const std::vector<double> s = solver_state();
+    const int check_every = std::max(1, options.check_every);
+    std::vector<double> s;
+    for (int it = 0;; it += check_every) {
+      if (it > 0) open_segment(tag + "/chunk");
+      if (recording())
+        for (int k = 0; k < check_every; ++k) {
+          apply(p, q, 1);
+          launch(iterate, c);
+        }
+      close_segment();
+      s = solver_state();
+      bool any = false;
+      for (int k = 0; k < batch; ++k) any |= s[16 * k + 6] != 0.0;
+      if (!any || it > max_it + check_every) break;
+    }
+    open_segment(fmt::format("segment {}", ++segment_count));
     std::vector<int> iterations(batch);
     for (int k = 0; k < batch; ++k) {
       iterations[k] = int(s[16 * k + 7]);
@@ -391,13 +470,17 @@ struct GpuTimestep::Impl {
     setup.vectors = {{"v_rhs", rhs}, {"v_x", u}, {"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
     setup.values = {{"zero_x", 0}};
     launch(kernel("newmark_setup"), setup);
-    auto apply = [&](cu::DevicePtr p, cu::DevicePtr q) {
+    const PlannedKernel& cell = kernel("newmark_apply_cell");
+    const PlannedKernel& node = kernel("newmark_apply_node");
+    auto apply = [&](cu::DevicePtr p, cu::DevicePtr q, int gate) {
       Call a;
       a.vectors = {{"v_p", p}, {"v_q", q}};
-      launch(kernel("newmark_apply_cell"), a);
-      launch(kernel("newmark_apply_node"), a);
+      a.values = {{"gate", double(gate)}};
+      launch(cell, a);
+      launch(node, a);
     };
-    cg_iterations = pcg(u, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, apply, "time-step solve");
+    cg_iterations = pcg(u, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, apply, "time-step solve",
+                        fmt::format("newmark {}", o));
     // cg_iterations output (one Real per batch item)
     std::vector<double> its(cg_iterations.begin(), cg_iterations.end());
     const std::vector<char> bytes = to_real(its.data(), its.size());
@@ -410,16 +493,21 @@ struct GpuTimestep::Impl {
     Call setup;
     setup.vectors = {{"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
     launch(kernel("extension_setup"), setup);
-    auto apply = [&](cu::DevicePtr p, cu::DevicePtr q) {
+    const PlannedKernel& band = kernel("extension_apply");
+    auto apply = [&](cu::DevicePtr p, cu::DevicePtr q, int gate) {
       Call a;
       a.vectors = {{"v_p", p}, {"v_q", q}};
-      launch(kernel("extension_apply"), a);
+      a.values = {{"gate", double(gate)}};
+      launch(band, a);
     };
-    pcg(x, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, apply, "displacement extension");
+    pcg(x, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, apply, "displacement extension",
+        fmt::format("extension {}", o));
   }
 
   void run() {
     cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
+    segment_count = 0;
+    open_segment("segment 0");
     int solved = -1;
     for (const PlannedKernel& k : plan.forward) {
       if (k.stage.empty()) {
@@ -434,6 +522,7 @@ struct GpuTimestep::Impl {
       else
         extension(o);
     }
+    close_segment();
     cu::check(d->CtxSynchronize(), "forward step");
   }
 };

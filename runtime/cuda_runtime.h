@@ -6,13 +6,14 @@
 // loads the modules and uploads the static grid data (cell nodes, volume weights, the
 // node<-(cell, corner) and node<-(point, side) incidence lists, band neighbours, and a
 // node<-band list built here). run() launches the planned kernels in order; an opaque
-// solve becomes the Jacobi-PCG kernel sequence (element apply, node gather, ordered
-// dot-product chunks, scalar update, axpy), every item of the batch frozen on the device
-// at exactly the iteration where the interpreter would stop, with a host check of the
-// solver state every `check_every` iterations. Dot products are summed in the
-// interpreter's order (chunks of 2048, in double), so with --fmad=false the GPU step
-// follows the interpreter's arithmetic closely. No atomics: results are bitwise
-// reproducible run to run.
+// solve becomes the Jacobi-PCG kernel sequence (element apply, node gather, and per
+// iteration one block-per-item kernel doing the dot products, scalars, axpys and the
+// direction update), every item of the batch frozen on the device at the iteration where
+// its convergence test passes, with a host check of the solver state every `check_every`
+// iterations. The launches between two host checks are captured once as a CUDA graph and
+// replayed. Dot products are summed in double in a fixed order (per-thread strided sums,
+// then a fixed block tree): not the interpreter's order, but the same bits run to run.
+// No atomics.
 #pragma once
 #include <map>
 #include <memory>
@@ -43,7 +44,8 @@ struct GpuOptions {
   std::string arch;             // empty: the device's sm_XY
   bool fmad = false;            // --fmad (false: comparable with the interpreter)
   int check_every = 8;          // CG iterations between host checks of the solver state
-  bool profile = false;         // synchronise after every launch and time it
+  bool profile = false;         // synchronise after every launch and time it (no graphs)
+  bool graphs = true;           // replay launch segments as CUDA graphs (SSC_GPU_GRAPHS=0: off)
 };
 
 struct GpuKernelTiming {

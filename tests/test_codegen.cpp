@@ -84,7 +84,7 @@ TEST(CodegenPlan, FusionAndCuts) {
   EXPECT_EQ(corot->parts[1].label, "corotation_force");
   EXPECT_EQ(corot->name.rfind("fwd_cell_corotation_corotation_force__", 0), 0u) << corot->name;
   // The solve is a solver sequence, each stage its own kernel.
-  for (const char* label : {"newmark_apply_cell", "newmark_apply_node", "pcg_dot", "pcg_update", "extension_apply"})
+  for (const char* label : {"newmark_apply_cell", "newmark_apply_node", "pcg_start", "pcg_iterate", "extension_apply"})
     EXPECT_NE(plan.find(false, label), nullptr) << label;
   for (const PlannedKernel& k : plan.forward) EXPECT_FALSE(k.cut.empty()) << k.name;
   // The adjoint runs ops in reverse: the first adjoint kernel belongs to the last op.

@@ -911,7 +911,7 @@ json sphere_scene() {
                   {"target", {0, 0.2, 0}}, {"min_depth", 0.2}, {"max_depth", 5.0}});
   cams.push_back({{"name", "b"}, {"width", 32}, {"height", 32}, {"fov_deg", 40}, {"eye", {-1.3, 0.6, -0.6}},
                   {"target", {0, 0.2, 0}}, {"min_depth", 0.2}, {"max_depth", 5.0}});
-  j["observation"] = {{"every", 1}, {"noise", 0.005}, {"seed", 5}, {"depth_scale", 1e-4}, {"phi_max", 0.1}, {"cameras", cams}};
+  j["observation"] = {{"every", 1}, {"noise", std::getenv("NOISEX") ? std::atof(std::getenv("NOISEX")) : 0.005}, {"seed", 5}, {"depth_scale", 1e-4}, {"phi_max", 0.1}, {"cameras", cams}};
   return j;
 }
 

@@ -203,7 +203,7 @@ Scene parse_scene(const nlohmann::json& config, const std::string& file) {
     s.solver.extension_tolerance = v.positive("extension_tolerance", v.number("extension_tolerance", s.solver.extension_tolerance));
     v.reject_unknown_keys();
   }
-  for (const char* section : {"observation", "reconstruction", "name", "description"})
+  for (const char* section : {"observation", "units", "name", "description"})
     if (r.has(section)) s.extra[section] = config.at(section);
   r.reject_unknown_keys();
   return s;

@@ -15,6 +15,7 @@
 #include "models/optim/reconstruction.h"
 #include "models/sim/parameters.h"
 #include "models/sim/problem.h"
+#include "models/sim/units.h"
 #include "tools/ssc/commands.h"
 #include "tools/ssc/fit_renders.h"
 #include "tools/ssc/progress.h"
@@ -86,6 +87,7 @@ Command register_reconstruct(CLI::App& app) {
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
   return [o] {
     const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max);
+    const UnitScales scales = unit_scales(problem.scene, problem.grid);  // checked before the long run
     ReconstructionOptions ro;
     ro.fit = o->fit;
     ro.starts = o->starts;
@@ -108,6 +110,13 @@ Command register_reconstruct(CLI::App& app) {
     j["parameters"] = named(r.names, r.starts[r.best].final);
     j["units"] = nlohmann::json::object();
     for (size_t i = 0; i < r.names.size(); ++i) j["units"][r.names[i]] = r.units[i];
+    if (!scales.identity()) {
+      // The scene is in its own units: report SI values too (models/sim/units.h).
+      nlohmann::json si = nlohmann::json::object();
+      for (size_t i = 0; i < r.names.size(); ++i) si[r.names[i]] = to_si(r.names[i], r.starts[r.best].final[i], scales);
+      j["parameters_si"] = si;
+      j["unit_scales"] = {{"length", scales.length}, {"mass", scales.mass}, {"time", scales.time}};
+    }
     j["cost"] = r.starts[r.best].final_cost;
     j["best_start"] = r.best;
     j["nominal"] = named(r.names, r.nominal);

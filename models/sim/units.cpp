@@ -1,0 +1,50 @@
+// Unit conversion of scene parameters (see units.h).
+#include "models/sim/units.h"
+
+#include <fmt/format.h>
+
+#include "models/io/json_reader.h"
+
+namespace ssc {
+
+UnitScales unit_scales(const Scene& scene, const SimGrid& grid) {
+  UnitScales u;
+  if (!scene.extra.contains("units")) return u;
+  const JsonReader r(scene.extra.at("units"), scene.file, "units");
+  u.time = r.positive("time", r.number("time", 1.0));
+  if (r.has("object_size") || r.has("object_mass")) {
+    r.require(!r.has("length") && !r.has("mass"), "length", "and mass cannot be combined with object_size/object_mass");
+    // The body's extent from its surface points (the rest surface's crossings of grid edges).
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+    for (const CollisionPoint& p : grid.collision_points)
+      for (int k = 0; k < 3; ++k) {
+        const double x = (1 - p.t) * grid.node_rest[3 * p.node_a + k] + p.t * grid.node_rest[3 * p.node_b + k];
+        lo[k] = std::min(lo[k], x);
+        hi[k] = std::max(hi[k], x);
+      }
+    const double extent = std::max((hi - lo).maxCoeff(), grid.h);
+    u.length = r.positive("object_size", r.number("object_size")) / extent;
+    u.mass = r.positive("object_mass", r.number("object_mass")) / (scene.material.density * grid.total_volume);
+  } else {
+    u.length = r.positive("length", r.number("length", 1.0));
+    u.mass = r.positive("mass", r.number("mass", 1.0));
+  }
+  r.reject_unknown_keys();
+  return u;
+}
+
+double to_si(const std::string& name, double v, const UnitScales& u) {
+  const double L = u.length, M = u.mass, T = u.time;
+  if (name == "youngs_modulus") return v * M / (L * T * T);
+  if (name == "density") return v * M / (L * L * L);
+  if (name == "mass_damping") return v / T;
+  if (name == "stiffness_damping") return v * T;
+  if (name == "poisson_ratio" || name.find("_deg") != std::string::npos) return v;
+  if (name.rfind("gravity", 0) == 0) return v * L / (T * T);
+  if (name.rfind("initial.linear_velocity", 0) == 0) return v * L / T;
+  if (name.rfind("initial.angular_velocity", 0) == 0) return v / T;
+  if (name.find("height") != std::string::npos) return v * L;
+  throw std::logic_error(fmt::format("no unit conversion for parameter '{}'", name));
+}
+
+}  // namespace ssc
