@@ -381,6 +381,62 @@ std::vector<Snippet> extension_solver(const Graph& g, int op, bool adjoint) {
         "store3(v_q, i, s);\n"));
   }
   for (Snippet& p : pcg_snippets(g, op)) s.push_back(p);
+  {
+    // The whole PCG loop of the band Laplacian in one block per item: apply (neighbour
+    // reads of p within the item's own vector, so a block barrier suffices) and the same
+    // arithmetic as pcg_iterate, until the convergence test stops it; no host checks.
+    Builder b(g, op, "extension_pcg_loop", Extent::Item);
+    b.grid("band_neighbors", "int").grid("band_degree", "int");
+    b.vec("x", true, x3).vec("r", true, x3).vec("z", true, x3).vec("p", true, x3, true).vec("q", true, x3);
+    b.vec("inv_diag", false, x3).value("len", "int").value("tol", "double").value("max_it", "int");
+    b.scratch("cg", "cg", "double", Domain::Scalar, 16, true);
+    b.stage("loop: whole PCG loop, band Laplacian q = L p + the pcg_iterate update (block per item)", true);
+    s.push_back(b.code(
+        "const double b_norm = $cg[0];\n"
+        "double rz = $cg[1], its = $cg[7];\n"
+        "bool active = $cg[6] != 0.0;\n"
+        "__syncthreads();  // every thread has read the state before thread 0 rewrites it\n"
+        "while (active) {\n"
+        "  for (int n = i; n < n_band; n += SSC_ITEM) {\n"
+        "    Vec3<Real> s = Real(g_band_degree[n]) * load3(v_p, n);\n"
+        "    for (int d = 0; d < 6; ++d) {\n"
+        "      const int nb = g_band_neighbors[6 * n + d];\n"
+        "      if (nb >= 0) s -= load3(v_p, nb);\n"
+        "    }\n"
+        "    store3(v_q, n, s);\n"
+        "  }\n"
+        "  __syncthreads();\n"
+        "  double pq[1] = {0};\n"
+        "  for (int k = i; k < len; k += SSC_ITEM) pq[0] += double(v_p[k]) * double(v_q[k]);\n"
+        "  gen::block_sum<1>(pq);\n"
+        "  const Real step = Real(rz / pq[0]);\n"
+        "  double acc[2] = {0, 0};\n"
+        "  for (int k = i; k < len; k += SSC_ITEM) {\n"
+        "    v_x[k] += step * v_p[k];\n"
+        "    const Real rk = v_r[k] - step * v_q[k];\n"
+        "    const Real zk = v_inv_diag[k] * rk;\n"
+        "    v_r[k] = rk;\n"
+        "    v_z[k] = zk;\n"
+        "    acc[0] += double(rk) * double(zk);\n"
+        "    acc[1] += double(rk) * double(rk);\n"
+        "  }\n"
+        "  gen::block_sum<2>(acc);\n"
+        "  const Real beta = Real(acc[0] / rz);\n"
+        "  for (int k = i; k < len; k += SSC_ITEM) v_p[k] = v_z[k] + beta * v_p[k];\n"
+        "  __syncthreads();  // p complete before the next apply reads neighbours\n"
+        "  rz = acc[0];\n"
+        "  its += 1;\n"
+        "  const double r_norm = sqrt(acc[1]);\n"
+        "  const double rel = r_norm / b_norm;\n"
+        "  bool converged = false;\n"
+        "  if (rel <= tol) { active = false; converged = true; }\n"
+        "  else if (its >= double(max_it) || !isfinite(r_norm)) active = false;\n"
+        "  if (i == 0) {\n"
+        "    $cg[1] = rz; $cg[2] = r_norm; $cg[3] = pq[0]; $cg[4] = double(step); $cg[5] = double(beta);\n"
+        "    $cg[6] = active ? 1 : 0; $cg[7] = its; $cg[8] = rel; $cg[9] = converged ? 1 : 0;\n"
+        "  }\n"
+        "}\n"));
+  }
   return s;
 }
 

@@ -6,6 +6,7 @@
 
 #include "graph/graph.h"
 #include "models/grid/sim_grid.h"
+#include "ops/collision.h"
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/newmark.h"
@@ -41,6 +42,16 @@ template <class Real>
 inline void add_rotation(Real* r, int cell, const Mat3<Real>& R) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) r[9 * cell + 3 * i + j] += R.m[i][j];
+}
+
+// The ground planes packed 6 per plane (normal, height, stiffness, alpha); returns the count.
+template <class Real>
+inline int load_ground_planes(const TensorStore<Real>& store, const OpNode& op, int b, ops::GroundPlane<Real>* planes) {
+  const int tensor = op.input("ground_planes");
+  const int count = int(store.stride(tensor) / 6);
+  const Real* q = store.data(tensor, b);
+  for (int p = 0; p < count; ++p, q += 6) planes[p] = {make_vec3(q[0], q[1], q[2]), q[3], q[4], q[5]};
+  return count;
 }
 
 // Per-corner K p for every cell (the matrix-free stiffness product).

@@ -49,6 +49,11 @@ struct Pending {
   std::vector<unsigned long long> slots;
 };
 
+bool fused_extension_disabled_by_env() {
+  const char* e = std::getenv("SSC_GPU_FUSED_EXTENSION");
+  return e && std::string(e) == "0";
+}
+
 bool graphs_disabled_by_env() {
   const char* e = std::getenv("SSC_GPU_GRAPHS");
   return e && std::string(e) == "0";
@@ -418,7 +423,7 @@ struct GpuTimestep::Impl {
   // iterations in between form one graph segment (`tag`). Returns the iterations per item.
   std::vector<int> pcg(cu::DevicePtr x, long len, double tol, int max_it,
                        const std::function<void(cu::DevicePtr, cu::DevicePtr, int)>& apply, const char* what,
-                       const std::string& tag) {
+                       const std::string& tag, const PlannedKernel* whole_loop = nullptr) {
     Call c;
     c.len = len;
     c.values = {{"tol", tol}, {"max_it", double(max_it)}};
@@ -432,7 +437,12 @@ struct GpuTimestep::Impl {
     }
     const int check_every = std::max(1, options.check_every);
     std::vector<double> s;
-    for (int it = 0;; it += check_every) {
+    if (whole_loop) {  // one block per item runs the loop to its end: one check
+      if (recording()) launch(*whole_loop, c);
+      close_segment();
+      s = solver_state();
+    }
+    for (int it = 0; !whole_loop; it += check_every) {
       if (it > 0) open_segment(tag + "/chunk");
       if (recording())
         for (int k = 0; k < check_every; ++k) {
@@ -500,8 +510,9 @@ struct GpuTimestep::Impl {
       a.values = {{"gate", double(gate)}};
       launch(band, a);
     };
+    const PlannedKernel* loop = options.fused_extension && !fused_extension_disabled_by_env() ? plan.find(false, "extension_pcg_loop") : nullptr;
     pcg(x, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, apply, "displacement extension",
-        fmt::format("extension {}", o));
+        fmt::format("extension {}", o), loop);
   }
 
   void run() {

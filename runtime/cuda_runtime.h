@@ -46,6 +46,7 @@ struct GpuOptions {
   int check_every = 8;          // CG iterations between host checks of the solver state
   bool profile = false;         // synchronise after every launch and time it (no graphs)
   bool graphs = true;           // replay launch segments as CUDA graphs (SSC_GPU_GRAPHS=0: off)
+  bool fused_extension = true;  // extension PCG loop in one block-per-item kernel (SSC_GPU_FUSED_EXTENSION=0: off)
 };
 
 struct GpuKernelTiming {

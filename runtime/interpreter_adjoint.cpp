@@ -106,13 +106,9 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
         break;
       }
       case OpKind::ContactForce: {
-        const Real *u = a.in("u_prev"), *v = a.in("v_prev"), *planes_in = a.in("ground_planes");
-        const int plane_count = int(store_.stride(op.input("ground_planes")) / 6);
+        const Real *u = a.in("u_prev"), *v = a.in("v_prev");
         ops::GroundPlane<Real> planes[ops::kMaxGroundPlanes];
-        for (int p = 0; p < plane_count; ++p) {
-          const Real* q = planes_in + 6 * p;
-          planes[p] = {make_vec3(q[0], q[1], q[2]), q[3], q[4], q[5]};
-        }
+        const int plane_count = load_ground_planes(store_, op, b, planes);
         const Real dt = a.scalar("dt"), theta = a.scalar("theta");
         const Real* f_bar = d.out("point_force");
         const int n = int(g.collision_points.size());

@@ -46,10 +46,23 @@ class StoppingRules {
 
 double sign(double v) { return v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0); }
 
-class Rprop : public Optimizer {
+// The part every optimiser here shares: its options and stopping rules.
+class RuledOptimizer : public Optimizer {
+ public:
+  explicit RuledOptimizer(const OptimizerOptions& o) : o_(o), rules_(o_) {}
+  bool done() const override { return rules_.done(); }
+  int iterations() const override { return rules_.iterations(); }
+  std::string stop_reason() const override { return rules_.reason(); }
+
+ protected:
+  OptimizerOptions o_;
+  StoppingRules rules_;
+};
+
+class Rprop : public RuledOptimizer {
  public:
   Rprop(const Eigen::VectorXd& x, const OptimizerOptions& o, bool paper_variant)
-      : o_(o), rules_(o_), paper_(paper_variant), x_(x), step_(Eigen::VectorXd::Constant(x.size(), o.rprop_initial_step)),
+      : RuledOptimizer(o), paper_(paper_variant), x_(x), step_(Eigen::VectorXd::Constant(x.size(), o.rprop_initial_step)),
         last_g_(Eigen::VectorXd::Zero(x.size())) {}
   const Eigen::VectorXd& ask() const override { return x_; }
   void tell(double cost, const Eigen::VectorXd& g) override {
@@ -70,20 +83,15 @@ class Rprop : public Optimizer {
     }
     last_g_ = next_g;
   }
-  bool done() const override { return rules_.done(); }
-  int iterations() const override { return rules_.iterations(); }
-  std::string stop_reason() const override { return rules_.reason(); }
 
  private:
-  OptimizerOptions o_;
-  StoppingRules rules_;
   bool paper_;
   Eigen::VectorXd x_, step_, last_g_;
 };
 
-class BarzilaiBorwein : public Optimizer {
+class BarzilaiBorwein : public RuledOptimizer {
  public:
-  BarzilaiBorwein(const Eigen::VectorXd& x, const OptimizerOptions& o) : o_(o), rules_(o_), x_(x) {}
+  BarzilaiBorwein(const Eigen::VectorXd& x, const OptimizerOptions& o) : RuledOptimizer(o), x_(x) {}
   const Eigen::VectorXd& ask() const override { return x_; }
   void tell(double cost, const Eigen::VectorXd& g) override {
     record(x_, cost);
@@ -108,19 +116,14 @@ class BarzilaiBorwein : public Optimizer {
     last_g_ = g;
     x_ -= step * g;
   }
-  bool done() const override { return rules_.done(); }
-  int iterations() const override { return rules_.iterations(); }
-  std::string stop_reason() const override { return rules_.reason(); }
 
  private:
-  OptimizerOptions o_;
-  StoppingRules rules_;
   Eigen::VectorXd x_, last_x_, last_g_;
 };
 
-class Lbfgs : public Optimizer {
+class Lbfgs : public RuledOptimizer {
  public:
-  Lbfgs(const Eigen::VectorXd& x, const OptimizerOptions& o) : o_(o), rules_(o_), x_(x), trial_(x) {}
+  Lbfgs(const Eigen::VectorXd& x, const OptimizerOptions& o) : RuledOptimizer(o), x_(x), trial_(x) {}
   const Eigen::VectorXd& ask() const override { return trial_; }
   void tell(double cost, const Eigen::VectorXd& g) override {
     record(trial_, cost);
@@ -189,8 +192,6 @@ class Lbfgs : public Optimizer {
     trial_ = x_ + direction_;
   }
 
-  OptimizerOptions o_;
-  StoppingRules rules_;
   Eigen::VectorXd x_, trial_, g_, direction_;
   std::deque<Eigen::VectorXd> s_, y_;
   double f_ = 0, alpha_ = 1, slope0_ = 0;

@@ -3,11 +3,16 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "models/io/errors.h"
 
 namespace ssc {
+
+// exp() of a larger argument overflows (or underflows to 0): positive values stay in
+// [e^-700, e^700], far beyond any physical parameter.
+constexpr double kMaxLog = 700;
 
 ParameterAxis default_axis(const std::string& name, double nominal) {
   ParameterAxis a;
@@ -62,7 +67,7 @@ Eigen::VectorXd ParameterSpace::to_physical(const Eigen::VectorXd& z) const {
   for (int i = 0; i < size(); ++i) {
     const ParameterAxis& a = axes_[i];
     switch (a.kind) {
-      case ParameterAxis::Kind::Positive: x[i] = std::exp(z[i]); break;
+      case ParameterAxis::Kind::Positive: x[i] = std::exp(std::clamp(z[i], -kMaxLog, kMaxLog)); break;
       case ParameterAxis::Kind::Bounded: x[i] = a.lower + (a.upper - a.lower) / (1 + std::exp(-z[i])); break;
       case ParameterAxis::Kind::Free: x[i] = a.scale * z[i]; break;
     }
@@ -75,7 +80,7 @@ Eigen::VectorXd ParameterSpace::gradient_to_internal(const Eigen::VectorXd& z, c
   for (int i = 0; i < size(); ++i) {
     const ParameterAxis& a = axes_[i];
     switch (a.kind) {
-      case ParameterAxis::Kind::Positive: out[i] = g[i] * std::exp(z[i]); break;
+      case ParameterAxis::Kind::Positive: out[i] = g[i] * std::exp(std::clamp(z[i], -kMaxLog, kMaxLog)); break;
       case ParameterAxis::Kind::Bounded: {
         const double s = 1 / (1 + std::exp(-z[i]));
         out[i] = g[i] * (a.upper - a.lower) * s * (1 - s);

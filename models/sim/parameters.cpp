@@ -29,10 +29,10 @@ bool parse_plane_name(const std::string& name, size_t plane_count, size_t* k, st
   return false;
 }
 
-void plane_angles(const Eigen::Vector3d& n, double* polar, double* azimuth) {
-  const Eigen::Vector3d u = n.normalized();
+void plane_angles(const PlaneSpec& plane, double* polar, double* azimuth) {
+  const Eigen::Vector3d u = plane.normal.normalized();
   *polar = std::acos(std::clamp(u.y(), -1.0, 1.0)) / kDegree;
-  *azimuth = std::atan2(u.z(), u.x()) / kDegree;
+  *azimuth = std::hypot(u.x(), u.z()) < 1e-12 ? plane.azimuth_deg : std::atan2(u.z(), u.x()) / kDegree;
 }
 
 Eigen::Vector3d* vector_field(PhysicalParameters& p, const std::string& base) {
@@ -106,7 +106,7 @@ double get_parameter(const PhysicalParameters& p, const std::string& name) {
   if (parse_plane_name(name, p.planes.size(), &k, &field)) {
     if (field == "height") return p.planes[k].height;
     double polar, azimuth;
-    plane_angles(p.planes[k].normal, &polar, &azimuth);
+    plane_angles(p.planes[k], &polar, &azimuth);
     return field == "polar_deg" ? polar : azimuth;
   }
   throw InputError(fmt::format("unknown parameter '{}'", name));
@@ -130,9 +130,10 @@ void set_parameter(PhysicalParameters& p, const std::string& name, double value)
       return;
     }
     double polar, azimuth;
-    plane_angles(p.planes[k].normal, &polar, &azimuth);
+    plane_angles(p.planes[k], &polar, &azimuth);
     (field == "polar_deg" ? polar : azimuth) = value;
     p.planes[k].normal = normal_from_angles(polar, azimuth);
+    p.planes[k].azimuth_deg = azimuth;
     return;
   }
   throw InputError(fmt::format("unknown parameter '{}'", name));
@@ -156,7 +157,7 @@ double parameter_gradient(const ParameterGradient& g, const PhysicalParameters& 
   if (parse_plane_name(name, p.planes.size(), &k, &field)) {
     if (field == "height") return g.plane_height[k];
     double polar, azimuth;
-    plane_angles(p.planes[k].normal, &polar, &azimuth);
+    plane_angles(p.planes[k], &polar, &azimuth);
     const double sp = std::sin(polar * kDegree), cp = std::cos(polar * kDegree);
     const double sa = std::sin(azimuth * kDegree), ca = std::cos(azimuth * kDegree);
     const Eigen::Vector3d dn = field == "polar_deg" ? Eigen::Vector3d(cp * ca, -sp, cp * sa) : Eigen::Vector3d(-sp * sa, 0, sp * ca);

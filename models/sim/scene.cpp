@@ -82,6 +82,7 @@ PlaneSpec read_plane(const JsonReader& r, const PlaneSpec& defaults) {
     const std::vector<double> a = r.numbers("angles_deg");
     r.require(a.size() == 2, "angles_deg", "must be [polar, azimuth] in degrees (polar 0 = normal +y)");
     p.normal = normal_from_angles(a[0], a[1]);
+    p.azimuth_deg = a[1];
   }
   p.height = r.number("height", p.height);
   p.stiffness = r.non_negative("stiffness", r.number("stiffness", p.stiffness));

@@ -32,6 +32,10 @@ struct PlaneSpec {
   double height = 0;                // plane: normal . x = height
   double stiffness = 1e5;           // Pa per metre of penetration
   double softmin_alpha = 100;       // 1/m
+  // The normal's azimuth about +y in degrees. Derived from the normal, except for a vertical
+  // normal, which has none: then this value is kept so that setting the azimuth before the
+  // polar angle (as an optimiser may) is not lost.
+  double azimuth_deg = 0;
 };
 
 struct DirichletBox {
