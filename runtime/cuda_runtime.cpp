@@ -49,9 +49,11 @@ struct Pending {
   std::vector<unsigned long long> slots;
 };
 
-bool fused_extension_disabled_by_env() {
+bool fused_extension_enabled(bool option) {
   const char* e = std::getenv("SSC_GPU_FUSED_EXTENSION");
-  return e && std::string(e) == "0";
+  if (e && std::string(e) == "0") return false;
+  if (e && std::string(e) == "1") return true;
+  return option;
 }
 
 bool graphs_disabled_by_env() {
@@ -510,7 +512,7 @@ struct GpuTimestep::Impl {
       a.values = {{"gate", double(gate)}};
       launch(band, a);
     };
-    const PlannedKernel* loop = options.fused_extension && !fused_extension_disabled_by_env() ? plan.find(false, "extension_pcg_loop") : nullptr;
+    const PlannedKernel* loop = fused_extension_enabled(options.fused_extension) ? plan.find(false, "extension_pcg_loop") : nullptr;
     pcg(x, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, apply, "displacement extension",
         fmt::format("extension {}", o), loop);
   }

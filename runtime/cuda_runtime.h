@@ -46,7 +46,10 @@ struct GpuOptions {
   int check_every = 8;          // CG iterations between host checks of the solver state
   bool profile = false;         // synchronise after every launch and time it (no graphs)
   bool graphs = true;           // replay launch segments as CUDA graphs (SSC_GPU_GRAPHS=0: off)
-  bool fused_extension = true;  // extension PCG loop in one block-per-item kernel (SSC_GPU_FUSED_EXTENSION=0: off)
+  // Extension PCG loop in one block-per-item kernel, no host checks (SSC_GPU_FUSED_EXTENSION=0/1
+  // overrides). Off: one SM is slower than the multi-block band apply for bands of ~10k
+  // nodes (H200: torus double 6.18 ms on, 4.85 ms off).
+  bool fused_extension = false;
 };
 
 struct GpuKernelTiming {

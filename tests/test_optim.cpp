@@ -566,12 +566,14 @@ TEST(ParameterSpaceTransforms, BoundedValuesNeverLeaveTheirRange) {
 
 TEST(ParameterSpaceTransforms, PositiveValuesStayPositiveAndFiniteForHugeZ) {
   // The contract in parameter_space.h: "every value the optimiser can produce is valid".
-  // x = exp(z) underflows to 0 below z = -745 and overflows to inf above z = 709.8.
+  // A bare exp(z) underflows to 0 below z = -745 and overflows to inf above z = 709.8
+  // (this test failed so before d739749); z is now clamped to +-700.
   const ParameterSpace space = mixed_space();
-  for (double t : {-1e3, 1e3}) {
+  for (double t : {-1e6, -1e3, -745.5, 709.9, 1e3, 1e6}) {
     const Vec x = space.to_physical(Vec::Constant(5, t));
     EXPECT_GT(x[0], 0) << "z = " << t << " gives youngs_modulus = " << x[0];
     EXPECT_TRUE(std::isfinite(x[0])) << "z = " << t << " gives youngs_modulus = " << x[0];
+    EXPECT_TRUE(std::isfinite(space.gradient_to_internal(Vec::Constant(5, t), Vec::Ones(5))[0])) << "z = " << t;
   }
 }
 
@@ -713,7 +715,8 @@ TEST(ParameterSpaceNames, AzimuthSetBeforePolarOnALevelGroundIsKept) {
   // A level ground (normal +y, the default) has polar 0 and no azimuth. The reconstruction
   // writes the fitted values in the order of --fit (reconstruction.cpp, with_values), so
   // `--fit ground.azimuth_deg,ground.polar_deg` from a level nominal ground sets the
-  // azimuth first and the polar angle second; the plane must end up with both.
+  // azimuth first and the polar angle second; the plane must end up with both. (Before
+  // d739749 the azimuth was lost: normal (0.5, 0.866, 0) instead of (0.354, 0.866, 0.354).)
   PhysicalParameters p = two_plane_parameters();
   p.planes[0].normal = Eigen::Vector3d(0, 1, 0);
   set_parameter(p, "ground.azimuth_deg", 45);
