@@ -323,7 +323,7 @@ TEST(OptimStopping, StalledCost) {
   }
 }
 
-TEST(OptimStopping, NonFiniteCostStopsRprop) {
+TEST(OptimStopping, NonFiniteCostStopsAndIsNeverBest) {
   for (const std::string& name : {"rprop", "rprop-paper", "gd"}) {
     auto opt = make_optimizer(name, vec({1.0}), OptimizerOptions{});
     opt->tell(std::numeric_limits<double>::quiet_NaN(), vec({1.0}));

@@ -32,8 +32,12 @@ std::vector<bool> evaluate_batch(const Problem& problem, const SurfaceConstraint
     for (int i = 0; i < n; ++i) sim.set_parameters(i, with_values(base, names, points[i]));
     *results = evaluate_cost_gradient(sim, cost, problem.frames);
     return ok;
-  } catch (const SimulationError&) {
-    if (n == 1) throw;
+  } catch (const SimulationError& e) {
+    if (n == 1) {
+      ok[0] = false;
+      (*failures)[0] = e.what();
+      return ok;
+    }
   }
   for (int i = 0; i < n; ++i) {
     try {
