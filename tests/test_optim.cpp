@@ -199,7 +199,7 @@ TEST(OptimConvergence, RosenbrockGdAndRprop) {
   // rprop-paper <= 0.39 / 1.1e-2 / 1.0e-4. Asserted: 1e-3 after 10000 iterations (10x
   // over the worst measured value), and progress between 1000 and 10000 iterations.
   for (const Vec& x0 : {vec({-1.2, 1}), vec({-1.5, 2}), vec({0, 0}), vec({2, 2}), vec({0.5, -0.5})}) {
-    for (const std::string& name : {"gd", "rprop", "rprop-paper"}) {
+    for (const std::string name : {"gd", "rprop", "rprop-paper"}) {
       OptimizerOptions o;
       o.max_iterations = name == std::string("gd") ? 500 : 10000;
       auto opt = make_optimizer(name, x0, o);
@@ -263,10 +263,11 @@ TEST(OptimStopping, IterationLimit) {
     EXPECT_EQ(opt->stop_reason(), "iteration limit") << name;
     // One evaluation per iteration for R-Prop and gd; L-BFGS also evaluates the start
     // (and line-search trials that are rejected).
-    if (name == "lbfgs")
+    if (name == "lbfgs") {
       EXPECT_GE(t.evaluations(), 6) << name;
-    else
+    } else {
       EXPECT_EQ(t.evaluations(), 5) << name;
+    }
     EXPECT_GT(t.gradients.back().norm(), 1e-3) << name;  // not stopped by the gradient
   }
 }
@@ -282,8 +283,11 @@ TEST(OptimStopping, GradientTolerance) {
     EXPECT_EQ(opt->stop_reason(), "gradient below tolerance") << name;
     // It stops at the first gradient below the tolerance (for L-BFGS: of an accepted point).
     EXPECT_LE(t.gradients.back().norm(), 1e-4) << name;
-    for (int k = 0; k + 1 < t.evaluations(); ++k)
-      if (name != "lbfgs") EXPECT_GT(t.gradients[k].norm(), 1e-4) << name << " evaluation " << k;
+    for (int k = 0; k + 1 < t.evaluations(); ++k) {
+      if (name != "lbfgs") {
+        EXPECT_GT(t.gradients[k].norm(), 1e-4) << name << " evaluation " << k;
+      }
+    }
     // ||g|| <= 1e-4 bounds |x - x*| by 1e-4 / lambda_min = 1e-4.
     EXPECT_LE((t.points.back() - q.c).norm(), 1e-4) << name;
   }
@@ -324,7 +328,7 @@ TEST(OptimStopping, StalledCost) {
 }
 
 TEST(OptimStopping, NonFiniteCostStopsAndIsNeverBest) {
-  for (const std::string& name : {"rprop", "rprop-paper", "gd"}) {
+  for (const std::string name : {"rprop", "rprop-paper", "gd"}) {
     auto opt = make_optimizer(name, vec({1.0}), OptimizerOptions{});
     opt->tell(std::numeric_limits<double>::quiet_NaN(), vec({1.0}));
     EXPECT_TRUE(opt->done()) << name;
@@ -377,7 +381,7 @@ TEST(OptimRules, RpropSkipsTheStepAfterASignChangeButThePaperVariantDoesNot) {
   };
   const std::vector<double> irprop = {0.07, 0.02, -0.04, -0.04, -0.01};
   const std::vector<double> paper = {0.07, 0.02, -0.04, -0.01, 0.02};
-  for (const std::string& name : {"rprop", "rprop-paper"}) {
+  for (const std::string name : {"rprop", "rprop-paper"}) {
     OptimizerOptions o;
     o.max_iterations = 5;
     auto opt = make_optimizer(name, vec({0.07}), o);
@@ -685,8 +689,11 @@ TEST(ParameterSpaceNames, ListAndSetGetRoundTripForEveryName) {
     const double value = names[i].find("_deg") != std::string::npos ? old_value + 7.5 : old_value * 1.5 + 0.25;
     set_parameter(p, names[i], value);
     EXPECT_NEAR(get_parameter(p, names[i]), value, 1e-12 * std::max(1.0, std::abs(value))) << names[i];
-    for (size_t j = 0; j < names.size(); ++j)
-      if (j != i) EXPECT_NEAR(get_parameter(p, names[j]), get_parameter(p0, names[j]), 1e-12) << names[i] << " changed " << names[j];
+    for (size_t j = 0; j < names.size(); ++j) {
+      if (j != i) {
+        EXPECT_NEAR(get_parameter(p, names[j]), get_parameter(p0, names[j]), 1e-12) << names[i] << " changed " << names[j];
+      }
+    }
     EXPECT_NEAR(p.planes[0].normal.norm(), 1, 1e-15);
     EXPECT_NEAR(p.planes[1].normal.norm(), 1, 1e-15);
   }
@@ -998,7 +1005,7 @@ TEST(ReconstructionEndToEnd, BatchEqualsStartsRunOneByOne) {
   const Problem& problem = sphere_problem();
   const std::vector<Vec> initial = {vec({0.4 * kTrueYoungsModulus}), vec({1.5 * kTrueYoungsModulus}),
                                     vec({3 * kTrueYoungsModulus})};
-  for (const std::string& name : {"rprop", "lbfgs"}) {
+  for (const std::string name : {"rprop", "lbfgs"}) {
     ReconstructionOptions o;
     o.fit = {"youngs_modulus"};
     o.optimizer = name;

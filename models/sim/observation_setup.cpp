@@ -73,8 +73,10 @@ ObservationSpec parse_observation_spec(const Scene& scene) {
 }
 
 ObservationSet render_observations(const Scene& scene, const SimGrid& grid, const ObservationSpec& spec,
-                                   const std::function<void(int, int)>& progress) {
+                                   const std::function<void(int, int)>& progress,
+                                   const std::function<void(Simulation&)>& configure) {
   Simulation sim(scene, grid);
+  if (configure) configure(sim);
   const DeformedSurface surface(grid);
   ObservationSet set;
   set.dt = spec.every * scene.time.dt;

@@ -14,6 +14,8 @@
 
 namespace ssc {
 
+class Simulation;
+
 struct ObservationSpec {
   int every = 1;              // observe every n-th simulation step (frame 0 = rest state)
   double noise = 0;           // metres, std along the viewing ray
@@ -27,8 +29,10 @@ struct ObservationSpec {
 ObservationSpec parse_observation_spec(const Scene& scene);
 
 // Simulates the scene and renders every camera at every observed step.
+// `configure` may place the simulation on a device before it runs.
 ObservationSet render_observations(const Scene& scene, const SimGrid& grid, const ObservationSpec& spec,
-                                   const std::function<void(int, int)>& progress = {});
+                                   const std::function<void(int, int)>& progress = {},
+                                   const std::function<void(Simulation&)>& configure = {});
 
 // Observed world points per frame, each mapped to the simulation step it shows;
 // InputError (naming dir) if the frame times do not fall on simulation steps or a frame

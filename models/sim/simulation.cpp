@@ -9,6 +9,7 @@
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/polar.h"
+#include "runtime/cuda_runtime.h"
 
 namespace ssc {
 
@@ -44,6 +45,18 @@ Simulation::Simulation(const Scene& scene, const SimGrid& grid, int batch, bool 
       if ((x.array() >= box.min.array()).all() && (x.array() <= box.max.array()).all()) fixed_[i] = 1;
   }
   reset();
+}
+
+Simulation::~Simulation() = default;
+
+void Simulation::use_gpu(const std::string& real) {
+  GpuOptions options;
+  options.real = real;
+  gpu_ = std::make_unique<GpuTimestep>(graph_.graph, grid_, batch(), interpreter_->options(), options);
+}
+
+int Simulation::last_cg_iterations(int b) const {
+  return gpu_ ? gpu_->cg_iterations().at(b) : interpreter_->report().cg_iterations.at(b);
 }
 
 void Simulation::set_parameters(int b, const PhysicalParameters& p) {
@@ -133,7 +146,13 @@ void Simulation::check_state(int b) const {
 void Simulation::step() {
   TensorStore<double>& st = interpreter_->store();
   try {
-    interpreter_->run();
+    if (gpu_) {
+      gpu_->upload(st);
+      gpu_->run();
+      gpu_->download(st);
+    } else {
+      interpreter_->run();
+    }
   } catch (const SimulationError& e) {
     throw SimulationError(fmt::format("step {}: {}", steps_ + 1, e.what()));
   }

@@ -23,9 +23,17 @@ struct PhysicalParameters {
   static PhysicalParameters from_scene(const Scene& scene);
 };
 
+class GpuTimestep;
+
 class Simulation {
  public:
   Simulation(const Scene& scene, const SimGrid& grid, int batch = 1, bool extension = false);
+  ~Simulation();
+
+  // Runs the forward steps with the generated CUDA kernels (runtime/cuda_runtime.h) instead of
+  // the interpreter; throws GpuUnavailable without a usable GPU. The adjoint stays on the CPU.
+  void use_gpu(const std::string& real = "double");
+  bool on_gpu() const { return gpu_ != nullptr; }
 
   int batch() const { return interpreter_->batch(); }
   void set_parameters(int b, const PhysicalParameters& p);
@@ -62,6 +70,8 @@ class Simulation {
 
   Interpreter<double>& interpreter() { return *interpreter_; }
   const RunReport& last_report() const { return interpreter_->report(); }
+  // CG iterations of the last step of batch item b, on whichever device ran it.
+  int last_cg_iterations(int b) const;
   const SimGrid& grid() const { return grid_; }
   const TimestepGraph& timestep_graph() const { return graph_; }
 
@@ -72,6 +82,8 @@ class Simulation {
   const SimGrid& grid_;
   TimestepGraph graph_;
   std::unique_ptr<Interpreter<double>> interpreter_;
+  std::unique_ptr<GpuTimestep> gpu_;
+  std::vector<int> gpu_cg_iterations_;
   std::vector<PhysicalParameters> params_;
   std::vector<char> fixed_;
   double dt_, theta_;

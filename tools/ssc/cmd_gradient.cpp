@@ -8,6 +8,7 @@
 #include "models/sim/parameters.h"
 #include "models/sim/problem.h"
 #include "tools/ssc/commands.h"
+#include "tools/ssc/device_option.h"
 #include "tools/ssc/progress.h"
 
 namespace ssc {
@@ -22,6 +23,7 @@ double fd_step(const std::string& name, double value) {
 
 Command register_gradient(CLI::App& app) {
   struct Options {
+    std::string device = "auto";
     std::string scene, observations;
     std::vector<std::string> overrides, params;
     bool check_fd = false;
@@ -32,10 +34,12 @@ Command register_gradient(CLI::App& app) {
   sub->add_option("scene", o->scene, "Scene file (the model whose cost is evaluated)")->required();
   sub->add_option("--observations", o->observations, "Observation folder (docs/observation-format.md)")->required();
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
+  add_device_option(sub, &o->device);
   sub->add_option("--params", o->params, "Parameters to report (default: all), comma-separated")->delimiter(',');
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres (default: the scene's, else 2 cells)");
   sub->add_flag("--check-fd", o->check_fd, "Also compute central finite differences (tightens the solver tolerances)");
   return [o] {
+    place_gradient_computation(o->device);
     std::vector<std::string> overrides = o->overrides;
     if (o->check_fd) {
       overrides.push_back("solver.tolerance=1e-12");

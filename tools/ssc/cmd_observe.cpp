@@ -6,6 +6,7 @@
 #include "models/sim/body.h"
 #include "models/sim/observation_setup.h"
 #include "tools/ssc/commands.h"
+#include "tools/ssc/device_option.h"
 #include "tools/ssc/progress.h"
 
 namespace ssc {
@@ -14,18 +15,22 @@ Command register_observe(CLI::App& app) {
   struct Options {
     std::string scene, out;
     std::vector<std::string> overrides;
+    std::string device = "auto";
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand("observe", "Simulate a scene and render synthetic depth observations");
   sub->add_option("scene", o->scene, "Scene file with an 'observation' section")->required();
   sub->add_option("--out", o->out, "Observation folder to write (replaced atomically)")->required();
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
+  add_device_option(sub, &o->device);
   return [o] {
     const Scene scene = load_scene(o->scene, o->overrides);
     const ObservationSpec spec = parse_observation_spec(scene);
     const SimGrid grid = build_body_grid(scene);
     Progress progress("observe", scene.time.steps / spec.every + 1);
-    const ObservationSet set = render_observations(scene, grid, spec, [&](int done, int) { progress.update(done); });
+    const ObservationSet set = render_observations(
+        scene, grid, spec, [&](int done, int) { progress.update(done); },
+        [&](Simulation& sim) { place_forward_simulation(sim, o->device); });
     progress.finish();
     write_observations(o->out, set);
     size_t points = 0;

@@ -17,6 +17,7 @@
 #include "models/sim/problem.h"
 #include "models/sim/units.h"
 #include "tools/ssc/commands.h"
+#include "tools/ssc/device_option.h"
 #include "tools/ssc/fit_renders.h"
 #include "tools/ssc/progress.h"
 
@@ -67,6 +68,7 @@ void write_convergence_plots(const OutputDir& out, const ReconstructionResult& r
 
 Command register_reconstruct(CLI::App& app) {
   struct Options {
+    std::string device = "auto";
     std::string scene, observations, out, optimizer = "rprop";
     std::vector<std::string> overrides, fit;
     int starts = 20, iterations = 50;
@@ -85,7 +87,9 @@ Command register_reconstruct(CLI::App& app) {
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
   sub->add_option("--out", o->out, "Output folder (replaced atomically)")->required();
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
+  add_device_option(sub, &o->device);
   return [o] {
+    place_gradient_computation(o->device);
     const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max);
     const UnitScales scales = unit_scales(problem.scene, problem.grid);  // checked before the long run
     ReconstructionOptions ro;

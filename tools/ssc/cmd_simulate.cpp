@@ -14,6 +14,7 @@
 #include "models/sim/deformed_surface.h"
 #include "models/sim/simulation.h"
 #include "tools/ssc/commands.h"
+#include "tools/ssc/device_option.h"
 #include "tools/ssc/progress.h"
 
 namespace ssc {
@@ -23,6 +24,7 @@ struct SimulateOptions {
   std::string scene, out;
   std::vector<std::string> overrides, probes;
   bool no_frames = false;
+  std::string device = "auto";
 };
 
 Eigen::Vector3d parse_probe(const std::string& text) {
@@ -43,8 +45,8 @@ nlohmann::json frame_record(const Simulation& sim, int frame, const std::vector<
   f["center_of_mass"] = vec_json(sim.center_of_mass(0));
   f["kinetic_energy"] = sim.kinetic_energy(0);
   f["elastic_energy"] = sim.elastic_energy(0);
-  f["cg_iterations"] = frame == 0 ? 0 : sim.last_report().cg_iterations[0];
-  f["degenerate_cells"] = frame == 0 ? 0 : sim.last_report().degenerate_cells[0];
+  f["cg_iterations"] = frame == 0 ? 0 : sim.last_cg_iterations(0);
+  if (!sim.on_gpu()) f["degenerate_cells"] = frame == 0 ? 0 : sim.last_report().degenerate_cells[0];
   nlohmann::json p = nlohmann::json::array();
   for (const Eigen::Vector3d& x : probes) p.push_back(vec_json(sim.probe(0, x)));
   f["probes"] = p;
@@ -59,6 +61,7 @@ int run_simulate(const SimulateOptions& o) {
   const SimGrid grid = build_body_grid(scene);
   Simulation sim(scene, grid);
   for (const Eigen::Vector3d& p : probes) sim.probe(0, p);  // reject bad probes before running
+  const std::string device = place_forward_simulation(sim, o.device);
   const DeformedSurface surface(grid);
   OutputDir out(o.out);
   std::filesystem::create_directories(out.file("frames"));
@@ -79,7 +82,7 @@ int run_simulate(const SimulateOptions& o) {
   for (int s = 1; s <= scene.time.steps; ++s) {
     sim.step();
     write_frame(s);
-    progress.update(s, fmt::format("CG {}", sim.last_report().cg_iterations[0]));
+    progress.update(s, fmt::format("CG {}", sim.last_cg_iterations(0)));
   }
   progress.finish();
   const double sim_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sim_start).count();
@@ -101,7 +104,7 @@ int run_simulate(const SimulateOptions& o) {
   for (const auto& p : probes) probe_list.push_back(vec_json(p));
   summary["probe_points"] = probe_list;
   summary["frames"] = frames;
-  summary["device"] = "cpu";
+  summary["device"] = device;
   summary["seconds_per_step"] = scene.time.steps > 0 ? sim_seconds / scene.time.steps : 0.0;
   summary["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   {
@@ -125,6 +128,7 @@ Command register_simulate(CLI::App& app) {
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
   sub->add_option("--probe", o->probes, "Record the displacement of rest point x,y,z (metres), repeatable");
   sub->add_flag("--no-frames", o->no_frames, "Write only summary.json, no PLY frames");
+  add_device_option(sub, &o->device);
   return [o] { return run_simulate(*o); };
 }
 

@@ -12,6 +12,7 @@
 #include "models/sim/parameters.h"
 #include "models/sim/problem.h"
 #include "tools/ssc/commands.h"
+#include "tools/ssc/device_option.h"
 #include "tools/ssc/progress.h"
 
 namespace ssc {
@@ -40,6 +41,7 @@ SweepRange parse_range(const std::string& text) {
 
 Command register_sweep(CLI::App& app) {
   struct Options {
+    std::string device = "auto";
     std::string scene, observations, param, out, cost = "ssc";
     std::vector<std::string> overrides;
     bool log = false;
@@ -52,6 +54,7 @@ Command register_sweep(CLI::App& app) {
   sub->add_option("--param", o->param, "NAME=LO:HI:N")->required();
   sub->add_option("--out", o->out, "Output folder (sweep.csv, sweep.svg)")->required();
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
+  add_device_option(sub, &o->device);
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
   sub->add_option("--truth", o->truth, "Value to mark in the plot (e.g. the ground truth)");
   sub->add_flag("--log", o->log, "Sample logarithmically");
@@ -59,6 +62,7 @@ Command register_sweep(CLI::App& app) {
                                      "difference), which simulate the truth from --truth")
       ->check(CLI::IsMember({"ssc", "disp", "sdf"}));
   return [o] {
+    place_gradient_computation(o->device);
     SweepRange range = parse_range(o->param);
     if (o->log && (range.lo <= 0 || range.hi <= 0)) throw InputError("--log needs positive LO and HI");
     const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max);

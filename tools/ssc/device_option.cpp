@@ -1,0 +1,44 @@
+// --device handling (see device_option.h).
+#include "tools/ssc/device_option.h"
+
+#include <cstdio>
+
+#include "models/io/errors.h"
+#include "models/sim/simulation.h"
+#include "runtime/cuda_runtime.h"
+
+namespace ssc {
+
+void add_device_option(CLI::App* sub, std::string* device) {
+  sub->add_option("--device", *device, "cpu, cuda or auto (GPU when usable, else CPU)")
+      ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
+}
+
+std::string place_forward_simulation(Simulation& sim, const std::string& device) {
+  if (device == "cpu") return "cpu";
+  const std::string why = gpu_unavailable_reason();
+  if (!why.empty()) {
+    if (device == "cuda") throw InputError("--device cuda: " + why + "; use --device cpu or --device auto");
+    std::fprintf(stderr, "ssc: %s; running on the CPU\n", why.c_str());
+    return "cpu";
+  }
+  try {
+    sim.use_gpu();
+  } catch (const GpuUnavailable& e) {
+    if (device == "cuda") throw InputError(std::string("--device cuda: ") + e.what());
+    std::fprintf(stderr, "ssc: %s; running on the CPU\n", e.what());
+    return "cpu";
+  }
+  const std::string name = gpu_description();
+  std::fprintf(stderr, "ssc: running the forward simulation on %s\n", name.c_str());
+  return name;
+}
+
+std::string place_gradient_computation(const std::string& device) {
+  if (device == "cuda")
+    throw InputError("--device cuda: gradients run on the CPU in this version (the generated adjoint kernels are "
+                     "not driven yet); use --device cpu or auto");
+  return "cpu";
+}
+
+}  // namespace ssc
