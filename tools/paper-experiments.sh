@@ -2,6 +2,8 @@
 # Reproduces the paper's torus experiments with ssc and writes docs/paper-comparison.md.
 #   tools/paper-experiments.sh            the reduced set (one configuration per sweep, 4 starts; CPU-sized)
 #   tools/paper-experiments.sh --full     every row, 20 starts x 40 iterations (hours on a CPU)
+#   ONLY="res20 cams4" tools/paper-experiments.sh --full   just those rows (added to earlier runs)
+#   STARTS=N ITERATIONS=K override the counts.
 # Each configuration renders its observations (out/paper/<name>-obs), reconstructs Young's
 # modulus from perturbed starts (out/paper/<name>-fit) and is summarised by
 # tools/paper_comparison.py: how many starts converged (within 10 % of 5000 Pa) and the mean
@@ -16,6 +18,9 @@ ssc=build/bin/ssc
 out=out/paper
 mkdir -p "$out"
 if [ "$mode" = full ]; then starts=20; iterations=40; else starts=4; iterations=20; fi
+starts=${STARTS:-$starts}
+iterations=${ITERATIONS:-$iterations}
+only=${ONLY:-}
 
 # camera k of n on a ring around the torus, 30 degrees above the horizon, 50x50 unless given
 cameras() {
@@ -35,16 +40,19 @@ PY
 
 run() {  # name, cameras, resolution, noise, phi_max
   local name=$1 ncam=$2 res=$3 noise=$4 phi=$5
+  if [ -n "$only" ] && [[ " $only " != *" $name "* ]]; then return; fi
   local sets=(--set "observation.cameras=$(cameras "$ncam" "$res")" --set "observation.noise=$noise"
               --set "observation.phi_max=$phi")
   echo "== $name: $ncam camera(s), ${res}x${res}, noise $noise m, phi_max $phi m, $starts starts x $iterations iterations"
   $ssc observe examples/torus.json --out "$out/$name-obs" "${sets[@]}" >/dev/null
   $ssc reconstruct examples/torus.json --observations "$out/$name-obs" --fit youngs_modulus \
     --starts "$starts" --iterations "$iterations" --seed 7 --out "$out/$name-fit" "${sets[@]}" | tail -2
-  echo "$name $ncam $res $noise $phi" >>"$out/runs.txt"
+  grep -v "^$name " "$out/runs.txt" >"$out/runs.tmp" 2>/dev/null || true
+  echo "$name $ncam $res $noise $phi $starts $iterations" >>"$out/runs.tmp"
+  mv "$out/runs.tmp" "$out/runs.txt"
 }
 
-rm -f "$out/runs.txt"
+[ -n "$only" ] || rm -f "$out/runs.txt"
 run base 1 50 0.01 0.4
 if [ "$mode" = full ]; then
   for n in 2 4 8; do run "cams$n" "$n" 50 0.01 0.4; done
