@@ -78,8 +78,8 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
   take_frame_costs(0);
   for (int t = 1; t <= steps; ++t) {
     sim.step();
-    if (t % K == 0 || !options.gradient)
-      for (int b = 0; b < B && options.gradient; ++b) stored[b][t] = sim.state(b);
+    if (options.gradient && t % K == 0)
+      for (int b = 0; b < B; ++b) stored[b][t] = sim.state(b);
     take_frame_costs(t);
   }
   if (!options.gradient) return results;

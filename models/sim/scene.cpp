@@ -92,7 +92,8 @@ PlaneSpec read_plane(const JsonReader& r, const PlaneSpec& defaults) {
 
 void read_ground(const JsonReader& r, Scene& s) {
   if (!r.boolean("enabled", true)) {
-    r.has("height"), r.has("normal"), r.has("angles_deg"), r.has("stiffness"), r.has("softmin_alpha"), r.has("planes");
+    // A disabled ground may keep its settings; they are accepted and ignored.
+    for (const char* key : {"height", "normal", "angles_deg", "stiffness", "softmin_alpha", "planes"}) r.has(key);
     r.reject_unknown_keys();
     return;
   }

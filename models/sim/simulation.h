@@ -55,7 +55,7 @@ class Simulation {
   Eigen::Vector3d angular_momentum(int b) const;  // about the origin
   double kinetic_energy(int b) const;
   double elastic_energy(int b) const;
-  double total_mass() const;
+  double total_mass() const;  // with batch item 0's density
   // Displacement of a rest-pose point (trilinear in its cell); InputError outside the body's cells.
   Eigen::Vector3d probe(int b, const Eigen::Vector3d& rest_point) const;
 
