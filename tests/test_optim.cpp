@@ -1078,7 +1078,8 @@ TEST(ReconstructionFailures, ALoneFailingStartIsReportedNotThrown) {
   // The same failure when the failing start is the only one running (a run with one
   // start, or the last start still running): reconstruct() must report it (failed, best
   // = -1; cmd_reconstruct.cpp turns best < 0 into its "every start's simulation failed"
-  // message) rather than throw and lose the other starts' results.
+  // message) rather than throw and lose the other starts' results. (Before 72d81ac,
+  // evaluate_batch rethrew the error when a batch of one failed.)
   const Problem& problem = sphere_problem();
   ReconstructionOptions o;
   o.fit = {"density"};

@@ -80,7 +80,7 @@ Eigen::VectorXd ParameterSpace::gradient_to_internal(const Eigen::VectorXd& z, c
   for (int i = 0; i < size(); ++i) {
     const ParameterAxis& a = axes_[i];
     switch (a.kind) {
-      case ParameterAxis::Kind::Positive: out[i] = g[i] * std::exp(std::clamp(z[i], -kMaxLog, kMaxLog)); break;
+      case ParameterAxis::Kind::Positive: out[i] = std::abs(z[i]) > kMaxLog ? 0.0 : g[i] * std::exp(z[i]); break;
       case ParameterAxis::Kind::Bounded: {
         const double s = 1 / (1 + std::exp(-z[i]));
         out[i] = g[i] * (a.upper - a.lower) * s * (1 - s);

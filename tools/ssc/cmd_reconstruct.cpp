@@ -99,12 +99,13 @@ Command register_reconstruct(CLI::App& app) {
     ro.optimizer_options.max_iterations = o->iterations;
     ro.seed = o->seed;
     make_optimizer(ro.optimizer, Eigen::VectorXd::Zero(1), ro.optimizer_options);  // reject unknown names early
+    const std::vector<std::string> names = expand_parameter_names(ro.fit, PhysicalParameters::from_scene(problem.scene));
     OutputDir out(o->out);
     const bool tty = isatty(fileno(stderr));
     const ReconstructionResult r = reconstruct(problem, ro, [&](int it, int active, double best, const Eigen::VectorXd& x) {
       if (!tty) return;
       std::string values;
-      for (int i = 0; i < x.size(); ++i) values += fmt::format(" {}={:.5g}", i < int(ro.fit.size()) ? ro.fit[i] : "", x[i]);
+      for (int i = 0; i < x.size(); ++i) values += fmt::format(" {}={:.5g}", names[i], x[i]);
       std::fprintf(stderr, "\rround %d: %d starts running, best cost %.6g,%s\033[K", it, active, best, values.c_str());
     });
     if (tty) std::fprintf(stderr, "\n");
