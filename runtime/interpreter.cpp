@@ -118,12 +118,9 @@ void Interpreter<Real>::execute(const OpNode& op) {
         const int n = int(g.collision_points.size());
 #pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
         for (int p = 0; p < n; ++p) {
-          const CollisionPoint& cp = g.collision_points[p];
-          const Real t = point_t_[p];
-          const Vec3<Real> xa = load3(node_rest_.data(), cp.node_a), xb = load3(node_rest_.data(), cp.node_b);
-          const Vec3<Real> x = (Real(1) - t) * (xa + load3(u, cp.node_a)) + t * (xb + load3(u, cp.node_b));
-          const Vec3<Real> vel = (Real(1) - t) * load3(v, cp.node_a) + t * load3(v, cp.node_b);
-          store3(f, p, ops::contact_force(x, vel, Real(cp.area), planes, plane_count, dt, theta));
+          Vec3<Real> x, vel;
+          contact_point_state(g, node_rest_.data(), point_t_.data(), u, v, p, x, vel);
+          store3(f, p, ops::contact_force(x, vel, Real(g.collision_points[p].area), planes, plane_count, dt, theta));
         }
         break;
       }

@@ -115,11 +115,8 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
         std::vector<Real> x_bar(3 * size_t(n)), v_bar(3 * size_t(n)), plane_bar(4 * size_t(n) * plane_count);
 #pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
         for (int p = 0; p < n; ++p) {
-          const CollisionPoint& cp = g.collision_points[p];
-          const Real t = point_t_[p];
-          const Vec3<Real> xa = load3(node_rest_.data(), cp.node_a), xb = load3(node_rest_.data(), cp.node_b);
-          const Vec3<Real> x = (Real(1) - t) * (xa + load3(u, cp.node_a)) + t * (xb + load3(u, cp.node_b));
-          const Vec3<Real> vel = (Real(1) - t) * load3(v, cp.node_a) + t * load3(v, cp.node_b);
+          Vec3<Real> x, vel;
+          contact_point_state(g, node_rest_.data(), point_t_.data(), u, v, p, x, vel);
           Vec3<Real> xb_ = zero3<Real>(), vb_ = zero3<Real>();
           Vec3<Real> nb[ops::kMaxGroundPlanes];
           Real hb[ops::kMaxGroundPlanes];
@@ -127,7 +124,7 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
             nb[k] = zero3<Real>();
             hb[k] = Real(0);
           }
-          ops::adj_contact_force(x, vel, Real(cp.area), planes, plane_count, dt, theta, load3(f_bar, p), xb_, vb_, nb, hb);
+          ops::adj_contact_force(x, vel, Real(g.collision_points[p].area), planes, plane_count, dt, theta, load3(f_bar, p), xb_, vb_, nb, hb);
           store3(x_bar.data(), p, xb_);
           store3(v_bar.data(), p, vb_);
           for (int k = 0; k < plane_count; ++k) {
