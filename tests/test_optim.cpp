@@ -1037,6 +1037,25 @@ TEST(ReconstructionEndToEnd, BatchEqualsStartsRunOneByOne) {
   }
 }
 
+TEST(ReconstructionEndToEnd, FiniteDifferenceGradientsTakeTheSameSteps) {
+  // The optimiser fed central differences instead of the adjoint: R-Prop only uses the
+  // gradient's sign, so both must take exactly the same path while the two agree in sign;
+  // the probes are counted as evaluations.
+  const Problem& problem = sphere_problem();
+  ReconstructionOptions o;
+  o.fit = {"youngs_modulus"};
+  o.optimizer = "rprop";
+  o.optimizer_options.max_iterations = 4;
+  o.initial_values = {vec({0.5 * kTrueYoungsModulus})};
+  const ReconstructionResult adjoint = reconstruct(problem, o);
+  o.finite_differences = true;
+  const ReconstructionResult fd = reconstruct(problem, o);
+  ASSERT_FALSE(fd.starts[0].failed) << fd.starts[0].failure;
+  EXPECT_TRUE(bitwise_equal(adjoint.starts[0].cost_history, fd.starts[0].cost_history));
+  EXPECT_EQ(fd.evaluations, 3 * adjoint.evaluations);
+  EXPECT_GT(fd.starts[0].final[0], 0.5 * kTrueYoungsModulus);  // moved towards the truth
+}
+
 TEST(ReconstructionFailures, ExplodingStartIsDroppedWithoutFailingTheOthers) {
   // Fitting the density: at 1e-6 kg/m^3 the contact forces throw the weightless body
   // kilometres away in the second step (SimulationError "exploded"). The batch fails, is

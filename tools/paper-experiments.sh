@@ -38,17 +38,19 @@ print(json.dumps(cams))
 PY
 }
 
-run() {  # name, cameras, resolution, noise, phi_max
+run() {  # name, cameras, resolution, noise, phi_max, [reconstruct options...]
   local name=$1 ncam=$2 res=$3 noise=$4 phi=$5
+  shift 5
+  local extra=("$@")
   if [ -n "$only" ] && [[ " $only " != *" $name "* ]]; then return; fi
   local sets=(--set "observation.cameras=$(cameras "$ncam" "$res")" --set "observation.noise=$noise"
               --set "observation.phi_max=$phi")
   echo "== $name: $ncam camera(s), ${res}x${res}, noise $noise m, phi_max $phi m, $starts starts x $iterations iterations"
   $ssc observe examples/torus.json --out "$out/$name-obs" "${sets[@]}" >/dev/null
   $ssc reconstruct examples/torus.json --observations "$out/$name-obs" --fit youngs_modulus \
-    --starts "$starts" --iterations "$iterations" --seed 7 --out "$out/$name-fit" "${sets[@]}" | tail -2
+    --starts "$starts" --iterations "$iterations" --seed 7 --out "$out/$name-fit" "${sets[@]}" "${extra[@]}" | tail -2
   grep -v "^$name " "$out/runs.txt" >"$out/runs.tmp" 2>/dev/null || true
-  echo "$name $ncam $res $noise $phi $starts $iterations" >>"$out/runs.tmp"
+  echo "$name $ncam $res $noise $phi $starts $iterations ${extra[*]}" >>"$out/runs.tmp"
   mv "$out/runs.tmp" "$out/runs.txt"
 }
 
@@ -59,6 +61,8 @@ if [ "$mode" = full ]; then
   for r in 20 100 200; do run "res$r" 1 "$r" 0.01 0.4; done
   for s in 0.001 0.1; do run "noise$s" 1 50 "$s" 0.4; done
   for p in 0.2 0.8; do run "phimax$p" 1 50 0.01 "$p"; done
+  for opt in gd lbfgs rprop-paper; do run "opt-$opt" 1 50 0.01 0.4 --optimizer "$opt"; done
+  run fd-rprop 1 50 0.01 0.4 --gradient fd
 fi
 python3 tools/paper_comparison.py "$out" "$mode" "$starts" "$iterations" >docs/paper-comparison.md
 echo "wrote docs/paper-comparison.md"

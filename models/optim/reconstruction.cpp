@@ -22,7 +22,10 @@ PhysicalParameters with_values(PhysicalParameters p, const std::vector<std::stri
 // that only the failing starts are dropped. Returns false for a failed item.
 std::vector<bool> evaluate_batch(const Problem& problem, const SurfaceConstraintCost& cost, const PhysicalParameters& base,
                                  const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& points,
-                                 std::vector<CostGradient>* results, std::vector<std::string>* failures) {
+                                 std::vector<CostGradient>* results, std::vector<std::string>* failures,
+                                 bool gradient = true) {
+  GradientOptions options;
+  options.gradient = gradient;
   const int n = int(points.size());
   std::vector<bool> ok(n, true);
   results->assign(n, CostGradient{});
@@ -30,7 +33,7 @@ std::vector<bool> evaluate_batch(const Problem& problem, const SurfaceConstraint
   try {
     Simulation sim(problem.scene, problem.grid, n, true);
     for (int i = 0; i < n; ++i) sim.set_parameters(i, with_values(base, names, points[i]));
-    *results = evaluate_cost_gradient(sim, cost, problem.frames);
+    *results = evaluate_cost_gradient(sim, cost, problem.frames, options);
     return ok;
   } catch (const SimulationError& e) {
     if (n == 1) {
@@ -43,7 +46,7 @@ std::vector<bool> evaluate_batch(const Problem& problem, const SurfaceConstraint
     try {
       Simulation sim(problem.scene, problem.grid, 1, true);
       sim.set_parameters(0, with_values(base, names, points[i]));
-      (*results)[i] = evaluate_cost_gradient(sim, cost, problem.frames)[0];
+      (*results)[i] = evaluate_cost_gradient(sim, cost, problem.frames, options)[0];
     } catch (const SimulationError& e) {
       ok[i] = false;
       (*failures)[i] = e.what();
@@ -118,19 +121,48 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
     for (int s : active) points.push_back(space.to_physical(opt[s]->ask()));
     std::vector<CostGradient> values;
     std::vector<std::string> failures;
-    const std::vector<bool> ok = evaluate_batch(problem, cost, base, result.names, points, &values, &failures);
+    const std::vector<bool> ok =
+        evaluate_batch(problem, cost, base, result.names, points, &values, &failures, !o.finite_differences);
     result.evaluations += int(active.size());
+    // The comparison the paper makes: central differences in the optimiser's coordinates
+    // instead of the adjoint, all 2 x parameters x starts probes as one batch.
+    std::vector<Eigen::VectorXd> fd_gradient(active.size());
+    std::vector<std::string> fd_failure(active.size());
+    if (o.finite_differences) {
+      std::vector<Eigen::VectorXd> probes;
+      for (int s : active)
+        for (int i = 0; i < space.size(); ++i)
+          for (double sign : {1.0, -1.0}) {
+            Eigen::VectorXd z = opt[s]->ask();
+            z[i] += sign * o.fd_step;
+            probes.push_back(space.to_physical(z));
+          }
+      std::vector<CostGradient> probe_values;
+      std::vector<std::string> probe_failures;
+      const std::vector<bool> probe_ok =
+          evaluate_batch(problem, cost, base, result.names, probes, &probe_values, &probe_failures, false);
+      result.evaluations += int(probes.size());
+      for (size_t k = 0; k < active.size(); ++k) {
+        fd_gradient[k].resize(space.size());
+        for (int i = 0; i < space.size(); ++i) {
+          const size_t a = (k * space.size() + i) * 2;
+          fd_gradient[k][i] = (probe_values[a].cost - probe_values[a + 1].cost) / (2 * o.fd_step);
+          if (!probe_ok[a] || !probe_ok[a + 1]) fd_failure[k] = "a finite-difference probe failed: " + probe_failures[probe_ok[a] ? a + 1 : a];
+        }
+      }
+    }
     for (size_t k = 0; k < active.size(); ++k) {
       StartRecord& rec = result.starts[active[k]];
-      if (!ok[k]) {
+      if (!ok[k] || !fd_failure[k].empty()) {
         rec.failed = true;
-        rec.failure = failures[k];
+        rec.failure = ok[k] ? fd_failure[k] : failures[k];
         continue;
       }
       Eigen::VectorXd g(space.size());
       for (int i = 0; i < space.size(); ++i) g[i] = parameter_gradient(values[k].gradient, with_values(base, result.names, points[k]), result.names[i]);
       const int before = opt[active[k]]->iterations();
-      opt[active[k]]->tell(values[k].cost, space.gradient_to_internal(opt[active[k]]->ask(), g));
+      opt[active[k]]->tell(values[k].cost, o.finite_differences ? fd_gradient[k]
+                                                                : space.gradient_to_internal(opt[active[k]]->ask(), g));
       if (opt[active[k]]->iterations() != before || rec.cost_history.empty()) {
         rec.cost_history.push_back(values[k].cost);
         rec.parameter_history.push_back(points[k]);

@@ -28,6 +28,8 @@ struct ReconstructionOptions {
   double low = 0.1, high = 10.0;  // multiplicative range of positive parameters
   double spread = 0.5;            // relative range of free parameters
   std::vector<Eigen::VectorXd> initial_values;  // overrides the sampling when non-empty (one per start)
+  bool finite_differences = false;  // central differences instead of the adjoint (for comparison)
+  double fd_step = 1e-4;            // in the optimiser's internal coordinates (log space: 0.01 %)
 };
 
 struct StartRecord {

@@ -72,6 +72,7 @@ Command register_reconstruct(CLI::App& app) {
     std::string scene, observations, out, optimizer = "rprop";
     std::vector<std::string> overrides, fit;
     int starts = 20, iterations = 50;
+    std::string gradient = "adjoint";
     std::uint64_t seed = 1;
     double phi_max = 0;
   };
@@ -84,6 +85,8 @@ Command register_reconstruct(CLI::App& app) {
   sub->add_option("--iterations", o->iterations, "Iterations per start")->check(CLI::Range(1, 100000));
   sub->add_option("--optimizer", o->optimizer, "rprop, rprop-paper, gd or lbfgs");
   sub->add_option("--seed", o->seed, "Seed of the start sampling");
+  sub->add_option("--gradient", o->gradient, "adjoint (default) or fd: central differences, for comparison")
+      ->check(CLI::IsMember({"adjoint", "fd"}));
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
   sub->add_option("--out", o->out, "Output folder (replaced atomically)")->required();
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
@@ -98,6 +101,7 @@ Command register_reconstruct(CLI::App& app) {
     ro.optimizer = o->optimizer;
     ro.optimizer_options.max_iterations = o->iterations;
     ro.seed = o->seed;
+    ro.finite_differences = o->gradient == "fd";
     make_optimizer(ro.optimizer, Eigen::VectorXd::Zero(1), ro.optimizer_options);  // reject unknown names early
     const std::vector<std::string> names = expand_parameter_names(ro.fit, PhysicalParameters::from_scene(problem.scene));
     OutputDir out(o->out);
@@ -126,6 +130,7 @@ Command register_reconstruct(CLI::App& app) {
     j["best_start"] = r.best;
     j["nominal"] = named(r.names, r.nominal);
     j["optimizer"] = ro.optimizer;
+    j["gradient"] = o->gradient;
     j["seed"] = ro.seed;
     j["evaluations"] = r.evaluations;
     j["wall_seconds"] = r.wall_seconds;
