@@ -51,6 +51,14 @@ for row in rows:
         paper = "optimisers and FD gradients: see the paper's appendix (FD runs did not converge there)"
     print(f"| {name} | {ncam} | {res}x{res} | {noise} | {phi} | {budget} | {options} | {conv} of {total} | {mean:.2f} % | {best:.1f} Pa ({wall:.0f} s) | {paper} |")
 print("""
+Reading the table: rows with fewer starts or iterations are cheaper comparisons, not the paper's
+budget. With the adjoint every start of every measured row converged; the remaining error is the
+minimum of the cost itself, which noise moves (0.1 m of noise along the rays, a quarter of the
+torus's minor radius, puts it about 6 % high). Central differences in the optimiser converged here
+too: the ssc cost is smooth in Young's modulus (docs/gradients.md), unlike the paper's, where no
+finite-difference run converged; they cost 3 cost evaluations per iteration instead of one
+forward-and-adjoint pass, and one per parameter more for every further fitted parameter.
+
 Not run by this script yet (no column for ssc): the ball bouncing off six random planes, the
 multi-parameter ball (gravity, Young's modulus, stiffness damping; 60 starts) and the dragon. The
 reconstruct command supports them (`--fit` any parameter set); what is missing is the scenes and
