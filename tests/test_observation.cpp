@@ -17,6 +17,7 @@
 #include <random>
 
 #include "models/io/errors.h"
+#include "tests/expect_input_error.h"
 #include "models/observation/camera.h"
 #include "models/observation/depth_png.h"
 #include "models/observation/depth_render.h"
@@ -43,16 +44,6 @@ struct TempDir {
   std::string operator/(const std::string& name) const { return (path / name).string(); }
 };
 
-// Runs fn, expects an InputError whose message contains every string in `parts`.
-void expect_input_error(const std::function<void()>& fn, const std::vector<std::string>& parts) {
-  try {
-    fn();
-    ADD_FAILURE() << "no InputError thrown; expected one mentioning " << parts.front();
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    for (const std::string& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << "'" << p << "' not in: " << msg;
-  }
-}
 
 // Camera at the world origin whose camera frame equals the world frame (x right, y down,
 // looking along +z).

@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "models/io/errors.h"
+#include "tests/expect_input_error.h"
 #include "models/optim/optimizer.h"
 #include "models/optim/parameter_space.h"
 #include "models/optim/reconstruction.h"
@@ -53,16 +54,6 @@ constexpr double kPi = 3.14159265358979323846;
 
 // ---- helpers -------------------------------------------------------------------------
 
-// Runs fn, expects an InputError whose message contains every string in `parts`.
-void expect_input_error(const std::function<void()>& fn, const std::vector<std::string>& parts) {
-  try {
-    fn();
-    ADD_FAILURE() << "no InputError thrown; expected one mentioning " << parts.front();
-  } catch (const InputError& e) {
-    const std::string msg = e.what();
-    for (const std::string& p : parts) EXPECT_NE(msg.find(p), std::string::npos) << "'" << p << "' not in: " << msg;
-  }
-}
 
 // Every point the optimiser asked for, with the cost and gradient it was told.
 struct Trace {
