@@ -14,7 +14,7 @@ cd "$root"
 mode=reduced
 [ "${1:-}" = "--full" ] && mode=full
 "$root/tools/setup-build" --target ssc >/dev/null
-ssc=build/bin/ssc
+ssc=${SSC:-build/bin/ssc}  # SSC=path: a copied binary, so that rebuilding does not change a long run
 out=out/paper
 mkdir -p "$out"
 if [ "$mode" = full ]; then starts=20; iterations=40; else starts=4; iterations=20; fi
