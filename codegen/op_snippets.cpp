@@ -358,11 +358,11 @@ std::vector<Snippet> extension_solver(const Graph& g, int op, bool adjoint) {
   } else {
     Builder b(g, op, "extension_adj_setup", Extent::Band);
     b.a("band_u", false).grid("band_degree", "int").vec("x", true, x3).vec("b", true, x3).vec("inv_diag", true, x3);
-    b.stage("rhs = band_u cotangent, x = 0, Jacobi diagonal");
+    b.value("zero_x", "int").stage("rhs = band_u cotangent, x = 0 or the later step's solution, Jacobi diagonal");
     s.push_back(b.code(
         "for (int k = 0; k < 3; ++k) {\n"
         "  v_b[3 * i + k] = $d_band_u[3 * i + k];\n"
-        "  v_x[3 * i + k] = Real(0);\n"
+        "  if (zero_x) v_x[3 * i + k] = Real(0);\n"
         "  v_inv_diag[3 * i + k] = Real(1) / Real(g_band_degree[i]);\n"
         "}\n"));
   }

@@ -1,4 +1,7 @@
-// The GPU forward timestep (see cuda_runtime.h).
+// The GPU timestep's machinery (see cuda_runtime.h): compiling and loading the planned
+// kernels, device buffers, argument packing, launch segments captured as CUDA graphs,
+// and the Jacobi-PCG loop with host checks. What a step launches is in
+// cuda_step_drivers.cpp.
 #include "runtime/cuda_runtime.h"
 
 #include <fmt/format.h>
@@ -7,12 +10,10 @@
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
-#include <functional>
 
 #include "codegen/cuda_source.h"
-#include "codegen/kernel_plan.h"
 #include "models/io/errors.h"
-#include "runtime/cuda_driver.h"
+#include "runtime/cuda_timestep_impl.h"
 
 namespace ssc {
 
@@ -39,506 +40,425 @@ std::string gpu_description() {
 
 namespace {
 
-constexpr int kBlock = 128;
-
-// A kernel launch with its argument slots (each argument in 8 bytes).
-struct Pending {
-  const PlannedKernel* kernel = nullptr;
-  cu::Function function = nullptr;
-  unsigned grid_x = 1, grid_y = 1, block = kBlock;
-  std::vector<unsigned long long> slots;
-};
-
-bool fused_extension_enabled(bool option) {
-  const char* e = std::getenv("SSC_GPU_FUSED_EXTENSION");
-  if (e && std::string(e) == "0") return false;
-  if (e && std::string(e) == "1") return true;
-  return option;
-}
+using gpu_detail::kBlock;
 
 bool graphs_disabled_by_env() {
   const char* e = std::getenv("SSC_GPU_GRAPHS");
   return e && std::string(e) == "0";
 }
 
-struct Buffer {
-  cu::DevicePtr ptr = 0;
-  size_t bytes = 0;
-};
-
-// Per-launch bindings of solver vectors and values.
-struct Call {
-  std::map<std::string, cu::DevicePtr> vectors;
-  std::map<std::string, double> values;
-  long len = 0;
-};
-
 }  // namespace
 
-struct GpuTimestep::Impl {
-  const Graph& graph;
-  const SimGrid& grid;
-  int batch;
-  SolverOptions solver;
-  GpuOptions options;
-  const cu::Driver* d = nullptr;
-  cu::Device device = 0;
-  cu::Context ctx = nullptr;
-  size_t real_size = 8;
-  DomainSizes sizes;
-  int plane_count = 0;
-  KernelPlan plan;
-  std::map<std::string, cu::Module> modules;
-  std::map<std::string, cu::Function> functions;
-  std::map<std::string, int> registers;
-  std::vector<Buffer> tensors;
-  std::map<std::string, Buffer> grid_buffers, scratch;
-  std::vector<int> cg_iterations;
-  std::map<std::string, GpuKernelTiming> timing;
-  double compile_s = 0;
-  // Launch segments between host checks of the solver state. With graphs, each segment
-  // is captured once (stream capture) under its tag and replayed afterwards: the launch
-  // sequence of a tag never depends on device data, only on the plan and the bindings,
-  // which are fixed for this object.
-  bool use_graphs = false;
-  cu::Stream capture_stream = nullptr;
-  std::map<std::string, cu::GraphExec> graph_execs;
-  std::vector<cu::Graph> graph_list;
-  std::string segment_tag;
-  bool replaying = false;  // the open segment has a graph: launches are not recorded
-  std::vector<Pending> pending;
-  int segment_count = 0;
+GpuTimestep::Impl::~Impl() {
+  if (!d) return;
+  d->CtxSetCurrent(ctx);
+  for (Buffer& x : tensors) d->MemFree(x.ptr);
+  for (Buffer& x : adjoints) d->MemFree(x.ptr);
+  for (auto& [n, x] : grid_buffers) d->MemFree(x.ptr);
+  for (auto& [n, x] : scratch) d->MemFree(x.ptr);
+  for (auto& [n, e] : graph_execs) d->GraphExecDestroy(e);
+  for (cu::Graph g : graph_list) d->GraphDestroy(g);
+  if (capture_stream) d->StreamDestroy(capture_stream);
+  for (auto& [n, m] : modules) d->ModuleUnload(m);
+  d->DevicePrimaryCtxRelease(device);
+}
 
-  Impl(const Graph& g, const SimGrid& gr, int b, const SolverOptions& s, const GpuOptions& o)
-      : graph(g), grid(gr), batch(b), solver(s), options(o) {}
+GpuTimestep::Impl::Buffer GpuTimestep::Impl::alloc(size_t bytes) {
+  Buffer b;
+  b.bytes = std::max<size_t>(bytes, 16);
+  cu::check(d->MemAlloc(&b.ptr, b.bytes), "cuMemAlloc");
+  cu::check(d->MemsetD8(b.ptr, 0, b.bytes), "cuMemsetD8");
+  return b;
+}
 
-  ~Impl() {
-    if (!d) return;
-    d->CtxSetCurrent(ctx);
-    for (Buffer& x : tensors) d->MemFree(x.ptr);
-    for (auto& [n, x] : grid_buffers) d->MemFree(x.ptr);
-    for (auto& [n, x] : scratch) d->MemFree(x.ptr);
-    for (auto& [n, e] : graph_execs) d->GraphExecDestroy(e);
-    for (cu::Graph g : graph_list) d->GraphDestroy(g);
-    if (capture_stream) d->StreamDestroy(capture_stream);
-    for (auto& [n, m] : modules) d->ModuleUnload(m);
-    d->DevicePrimaryCtxRelease(device);
-  }
-
-  Buffer alloc(size_t bytes) {
-    Buffer b;
-    b.bytes = std::max<size_t>(bytes, 16);
-    cu::check(d->MemAlloc(&b.ptr, b.bytes), "cuMemAlloc");
-    cu::check(d->MemsetD8(b.ptr, 0, b.bytes), "cuMemsetD8");
-    return b;
-  }
-
-  // Host doubles -> device Real.
-  std::vector<char> to_real(const double* v, size_t n) const {
-    std::vector<char> out(n * real_size);
-    for (size_t i = 0; i < n; ++i) {
-      if (real_size == 8)
-        std::memcpy(out.data() + 8 * i, &v[i], 8);
-      else {
-        const float f = float(v[i]);
-        std::memcpy(out.data() + 4 * i, &f, 4);
-      }
-    }
-    return out;
-  }
-  void upload_real(const std::string& name, const std::vector<double>& v) {
-    const std::vector<char> bytes = to_real(v.data(), v.size());
-    Buffer b = alloc(bytes.size());
-    if (!bytes.empty()) cu::check(d->MemcpyHtoD(b.ptr, bytes.data(), bytes.size()), "upload grid");
-    grid_buffers["g_" + name] = b;
-  }
-  void upload_int(const std::string& name, const std::vector<int>& v) {
-    Buffer b = alloc(v.size() * sizeof(int));
-    if (!v.empty()) cu::check(d->MemcpyHtoD(b.ptr, v.data(), v.size() * sizeof(int)), "upload grid");
-    grid_buffers["g_" + name] = b;
-  }
-
-  void upload_grid() {
-    const SimGrid& g = grid;
-    upload_int("cell_nodes", g.cell_nodes);
-    upload_real("cell_weights", g.cell_volume_weights);
-    upload_real("node_volume", g.node_volume);
-    upload_real("node_rest", g.node_rest);
-    upload_int("node_cell_offset", g.node_cell_offset);
-    upload_int("node_cell_entry", g.node_cell_entry);
-    std::vector<int> pn;
-    std::vector<double> pt, pa;
-    for (const CollisionPoint& p : g.collision_points) {
-      pn.push_back(p.node_a);
-      pn.push_back(p.node_b);
-      pt.push_back(p.t);
-      pa.push_back(p.area);
-    }
-    upload_int("point_nodes", pn);
-    upload_real("point_t", pt);
-    upload_real("point_area", pa);
-    upload_int("node_point_offset", g.node_point_offset);
-    upload_int("node_point_entry", g.node_point_entry);
-    upload_int("band_neighbors", g.band_neighbors);
-    upload_int("band_degree", g.band_degree);
-    // node <- band incidence in (band, direction) order: the adjoint extension gathers it.
-    std::vector<std::vector<int>> nb(g.node_count);
-    for (int i = 0; i < g.band_count; ++i)
-      for (int k = 0; k < 6; ++k)
-        if (g.band_neighbors[6 * i + k] <= -2) nb[-g.band_neighbors[6 * i + k] - 2].push_back(i);
-    std::vector<int> off{0}, ent;
-    for (const auto& l : nb) {
-      ent.insert(ent.end(), l.begin(), l.end());
-      off.push_back(int(ent.size()));
-    }
-    upload_int("node_band_offset", off);
-    upload_int("node_band_entry", ent);
-  }
-
-  size_t count(Domain dm) const { return size_t(sizes.count(dm)); }
-
-  void setup() {
-    std::string why;
-    d = cu::driver(&why);
-    if (!d) throw GpuUnavailable("no usable GPU: " + why);
-    if (!nvrtc_available()) throw GpuUnavailable("no usable GPU: ssc was built without NVRTC");
-    cu::check(d->DeviceGet(&device, 0), "cuDeviceGet");
-    cu::check(d->DevicePrimaryCtxRetain(&ctx, device), "cuDevicePrimaryCtxRetain");
-    cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
-    if (options.arch.empty()) {
-      int major = 0, minor = 0;
-      d->DeviceGetAttribute(&major, cu::kAttrComputeCapabilityMajor, device);
-      d->DeviceGetAttribute(&minor, cu::kAttrComputeCapabilityMinor, device);
-      options.arch = fmt::format("sm_{}{}", major, minor);
-    }
-    real_size = options.real == "float" ? 4 : 8;
-    sizes = domain_sizes(grid);
-    for (const TensorInfo& t : graph.tensors())
-      if (t.name == "ground_planes") plane_count = t.components / 6;
-
-    plan = plan_kernels(graph);
-    std::vector<KernelSource> sources;
-    for (const PlannedKernel& k : plan.forward)
-      if (!k.duplicate) sources.push_back({k.name, kernel_source(k, {options.real, kBlock})});
-    NvrtcOptions no;
-    no.arch = options.arch;
-    no.fmad = options.fmad;
-    const auto start = std::chrono::steady_clock::now();
-    const std::vector<CompiledKernel> compiled = compile_kernels(sources, no);
-    compile_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    for (const CompiledKernel& c : compiled) {
-      cu::Module m;
-      cu::check(d->ModuleLoadData(&m, c.image.data()), ("cuModuleLoadData " + c.name).c_str());
-      modules[c.name] = m;
-      cu::Function f;
-      cu::check(d->ModuleGetFunction(&f, m, c.name.c_str()), ("cuModuleGetFunction " + c.name).c_str());
-      functions[c.name] = f;
-      int regs = 0;
-      d->FuncGetAttribute(&regs, cu::kFuncAttrNumRegs, f);
-      registers[c.name] = regs;
-    }
-
-    for (const TensorInfo& t : graph.tensors())
-      tensors.push_back(alloc(size_t(batch) * count(t.domain) * t.components * real_size));
-    upload_grid();
-    // Scratch: the largest request per name; solver vectors for the longer of node/band.
-    std::map<std::string, size_t> need;
-    for (const PlannedKernel& k : plan.forward)
-      for (const KernelParam& p : k.params)
-        if (p.kind == KernelParam::Kind::Scratch) {
-          const size_t elem = p.type == "double" ? 8 : p.type == "int" ? 4 : real_size;
-          need[p.name] = std::max(need[p.name], size_t(batch) * count(p.domain) * p.components * elem);
-        }
-    const size_t len_max = 3 * size_t(std::max(sizes.node, sizes.band));
-    for (const char* v : {"v_r", "v_z", "v_p", "v_q", "v_b", "v_inv_diag"}) need[v] = size_t(batch) * len_max * real_size;
-    for (auto& [n, bytes] : need) scratch[n] = alloc(bytes);
-    cg_iterations.assign(batch, 0);
-    use_graphs = options.graphs && !options.profile && !graphs_disabled_by_env() && d->has_graphs() &&
-                 d->StreamCreate(&capture_stream, cu::kStreamNonBlocking) == 0;
-    if (!use_graphs) capture_stream = nullptr;
-  }
-
-  size_t extent_count(Extent e, long len) const {
-    switch (e) {
-      case Extent::One: return 1;
-      case Extent::Cell: return sizes.cell;
-      case Extent::Node: return sizes.node;
-      case Extent::Point: return sizes.point;
-      case Extent::Band: return sizes.band;
-      case Extent::Len: return size_t(len);
-      case Extent::Item: return 1;
-    }
-    return 0;
-  }
-
-  void launch(const PlannedKernel& k, const Call& call = {}) {
-    if (replaying) return;  // the open segment is replayed from its graph
-    const size_t n = extent_count(k.extent, call.len);
-    if (n == 0 || batch == 0) return;
-    Pending pl;
-    pl.kernel = &k;
-    pl.function = functions.at(k.name);
-    std::vector<unsigned long long>& slots = pl.slots;
-    slots.reserve(8 + k.params.size());
-    auto put_int = [&](long v) {
-      unsigned long long s = 0;
-      const int i = int(v);
-      std::memcpy(&s, &i, 4);
-      slots.push_back(s);
-    };
-    auto put_double = [&](double v) {
-      unsigned long long s = 0;
-      std::memcpy(&s, &v, 8);
-      slots.push_back(s);
-    };
-    auto put_real = [&](double v) {
-      if (real_size == 8) return put_double(v);
-      unsigned long long s = 0;
-      const float f = float(v);
-      std::memcpy(&s, &f, 4);
-      slots.push_back(s);
-    };
-    put_int(sizes.cell);
-    put_int(sizes.node);
-    put_int(sizes.point);
-    put_int(sizes.band);
-    put_int(plane_count);
-    put_int(batch);
-    put_real(grid.h);
-    for (const KernelParam& p : k.params) {
-      switch (p.kind) {
-        case KernelParam::Kind::Tensor:
-        case KernelParam::Kind::Adjoint:
-          slots.push_back(tensors.at(p.tensor).ptr);
-          break;
-        case KernelParam::Kind::Grid:
-          slots.push_back(grid_buffers.at(p.name).ptr);
-          break;
-        case KernelParam::Kind::Scratch:
-          slots.push_back(scratch.at(p.name).ptr);
-          break;
-        case KernelParam::Kind::Vector: {
-          auto it = call.vectors.find(p.name);
-          if (it == call.vectors.end()) throw std::logic_error("gpu: unbound vector " + p.name + " of " + k.name);
-          slots.push_back(it->second);
-          break;
-        }
-        case KernelParam::Kind::Value: {
-          if (p.name == "len") {
-            put_int(call.len);
-            break;
-          }
-          auto it = call.values.find(p.name);
-          if (it == call.values.end()) throw std::logic_error("gpu: unbound value " + p.name + " of " + k.name);
-          if (p.type == "double")
-            put_double(it->second);
-          else
-            put_int(long(it->second));
-          break;
-        }
-      }
-    }
-    if (k.extent == Extent::Item) {
-      pl.grid_x = 1;
-      pl.block = kItemBlock;
+// Host doubles -> device Real.
+std::vector<char> GpuTimestep::Impl::to_real(const double* v, size_t n) const {
+  std::vector<char> out(n * real_size);
+  for (size_t i = 0; i < n; ++i) {
+    if (real_size == 8) {
+      std::memcpy(out.data() + 8 * i, &v[i], 8);
     } else {
-      pl.grid_x = unsigned((n + kBlock - 1) / kBlock);
-      pl.block = kBlock;
-    }
-    pl.grid_y = unsigned(batch);
-    if (use_graphs)
-      pending.push_back(std::move(pl));
-    else
-      submit(pl, nullptr);
-  }
-
-  void submit(Pending& pl, cu::Stream stream) {
-    std::vector<void*> args;
-    args.reserve(pl.slots.size());
-    for (unsigned long long& s : pl.slots) args.push_back(&s);
-    const std::string& name = pl.kernel->name;
-    const auto start = std::chrono::steady_clock::now();
-    cu::check(d->LaunchKernel(pl.function, pl.grid_x, pl.grid_y, 1, pl.block, 1, 1, 0, stream, args.data(), nullptr),
-              ("cuLaunchKernel " + name).c_str());
-    if (options.profile) {
-      cu::check(d->CtxSynchronize(), ("kernel " + name).c_str());
-      GpuKernelTiming& t = timing[name];
-      t.name = name;
-      t.launches++;
-      t.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-      t.registers = registers[name];
+      const float f = float(v[i]);
+      std::memcpy(out.data() + 4 * i, &f, 4);
     }
   }
+  return out;
+}
 
-  // Opens a launch segment named `tag` (graphs only): if it was captured before, the
-  // launches until close_segment() are skipped and the graph is replayed instead.
-  void open_segment(const std::string& tag) {
-    if (!use_graphs) return;
-    segment_tag = tag;
-    replaying = graph_execs.count(tag) != 0;
-    pending.clear();
+void GpuTimestep::Impl::from_real(const std::vector<char>& bytes, double* v, size_t n) const {
+  for (size_t i = 0; i < n; ++i) {
+    if (real_size == 8) {
+      std::memcpy(&v[i], bytes.data() + 8 * i, 8);
+    } else {
+      float f;
+      std::memcpy(&f, bytes.data() + 4 * i, 4);
+      v[i] = f;
+    }
   }
-  bool recording() const { return !replaying; }
+}
 
-  // Submits the open segment (on the legacy stream, ordered with the copies).
-  void close_segment() {
-    if (!use_graphs) return;
-    if (!replaying && !pending.empty()) {
-      cu::Graph graph = nullptr;
-      cu::check(d->StreamBeginCapture(capture_stream, cu::kCaptureModeThreadLocal), "cuStreamBeginCapture");
-      try {
-        for (Pending& pl : pending) submit(pl, capture_stream);
-      } catch (...) {
-        d->StreamEndCapture(capture_stream, &graph);
-        if (graph) d->GraphDestroy(graph);
-        pending.clear();
-        throw;
+void GpuTimestep::Impl::upload_real(const std::string& name, const std::vector<double>& v) {
+  const std::vector<char> bytes = to_real(v.data(), v.size());
+  Buffer b = alloc(bytes.size());
+  if (!bytes.empty()) cu::check(d->MemcpyHtoD(b.ptr, bytes.data(), bytes.size()), "upload grid");
+  grid_buffers["g_" + name] = b;
+}
+
+void GpuTimestep::Impl::upload_int(const std::string& name, const std::vector<int>& v) {
+  Buffer b = alloc(v.size() * sizeof(int));
+  if (!v.empty()) cu::check(d->MemcpyHtoD(b.ptr, v.data(), v.size() * sizeof(int)), "upload grid");
+  grid_buffers["g_" + name] = b;
+}
+
+void GpuTimestep::Impl::upload_grid() {
+  const SimGrid& g = grid;
+  upload_int("cell_nodes", g.cell_nodes);
+  upload_real("cell_weights", g.cell_volume_weights);
+  upload_real("node_volume", g.node_volume);
+  upload_real("node_rest", g.node_rest);
+  upload_int("node_cell_offset", g.node_cell_offset);
+  upload_int("node_cell_entry", g.node_cell_entry);
+  std::vector<int> pn;
+  std::vector<double> pt, pa;
+  for (const CollisionPoint& p : g.collision_points) {
+    pn.push_back(p.node_a);
+    pn.push_back(p.node_b);
+    pt.push_back(p.t);
+    pa.push_back(p.area);
+  }
+  upload_int("point_nodes", pn);
+  upload_real("point_t", pt);
+  upload_real("point_area", pa);
+  upload_int("node_point_offset", g.node_point_offset);
+  upload_int("node_point_entry", g.node_point_entry);
+  upload_int("band_neighbors", g.band_neighbors);
+  upload_int("band_degree", g.band_degree);
+  // node <- band incidence in (band, direction) order: the adjoint extension gathers it.
+  std::vector<std::vector<int>> nb(g.node_count);
+  for (int i = 0; i < g.band_count; ++i)
+    for (int k = 0; k < 6; ++k)
+      if (g.band_neighbors[6 * i + k] <= -2) nb[-g.band_neighbors[6 * i + k] - 2].push_back(i);
+  std::vector<int> off{0}, ent;
+  for (const auto& l : nb) {
+    ent.insert(ent.end(), l.begin(), l.end());
+    off.push_back(int(ent.size()));
+  }
+  upload_int("node_band_offset", off);
+  upload_int("node_band_entry", ent);
+}
+
+void GpuTimestep::Impl::compile_and_load(const std::vector<const PlannedKernel*>& kernels) {
+  std::vector<KernelSource> sources;
+  for (const PlannedKernel* k : kernels)
+    if (!k->duplicate && !functions.count(k->name)) sources.push_back({k->name, kernel_source(*k, {options.real, kBlock})});
+  NvrtcOptions no;
+  no.arch = options.arch;
+  no.fmad = options.fmad;
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<CompiledKernel> compiled = compile_kernels(sources, no);
+  compile_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  for (const CompiledKernel& c : compiled) {
+    cu::Module m;
+    cu::check(d->ModuleLoadData(&m, c.image.data()), ("cuModuleLoadData " + c.name).c_str());
+    modules[c.name] = m;
+    cu::Function f;
+    cu::check(d->ModuleGetFunction(&f, m, c.name.c_str()), ("cuModuleGetFunction " + c.name).c_str());
+    functions[c.name] = f;
+    int regs = 0;
+    d->FuncGetAttribute(&regs, cu::kFuncAttrNumRegs, f);
+    registers[c.name] = regs;
+  }
+}
+
+// Scratch: the largest request per name over the kernels (and over earlier calls).
+void GpuTimestep::Impl::allocate_scratch(const std::vector<PlannedKernel>& kernels) {
+  std::map<std::string, size_t> need;
+  for (const PlannedKernel& k : kernels)
+    for (const KernelParam& p : k.params)
+      if (p.kind == KernelParam::Kind::Scratch) {
+        const size_t elem = p.type == "double" ? 8 : p.type == "int" ? 4 : real_size;
+        need[p.name] = std::max(need[p.name], size_t(batch) * count(p.domain) * p.components * elem);
       }
-      cu::check(d->StreamEndCapture(capture_stream, &graph), "cuStreamEndCapture");
-      graph_list.push_back(graph);
-      cu::GraphExec exec = nullptr;
-      cu::check(d->GraphInstantiate(&exec, graph, 0), "cuGraphInstantiate");
-      graph_execs[segment_tag] = exec;
+  // Solver vectors, for the longer of node and band vectors.
+  const size_t len_max = 3 * size_t(std::max(sizes.node, sizes.band));
+  for (const char* v : {"v_r", "v_z", "v_p", "v_q", "v_b", "v_inv_diag"}) need[v] = size_t(batch) * len_max * real_size;
+  for (auto& [n, bytes] : need) {
+    auto it = scratch.find(n);
+    if (it != scratch.end() && it->second.bytes >= bytes) continue;
+    if (it != scratch.end()) {  // captured graphs hold the old pointer: capture anew
+      d->MemFree(it->second.ptr);
+      for (auto& [tag, e] : graph_execs) d->GraphExecDestroy(e);
+      graph_execs.clear();
     }
-    auto it = graph_execs.find(segment_tag);
-    if (it != graph_execs.end()) cu::check(d->GraphLaunch(it->second, nullptr), "cuGraphLaunch");
-    pending.clear();
-    replaying = false;
+    scratch[n] = alloc(bytes);
   }
+}
 
-  const PlannedKernel& kernel(const std::string& label) const {
-    const PlannedKernel* k = plan.find(false, label);
-    if (!k) throw std::logic_error("gpu: the plan has no kernel " + label);
-    return *k;
+void GpuTimestep::Impl::setup() {
+  std::string why;
+  d = cu::driver(&why);
+  if (!d) throw GpuUnavailable("no usable GPU: " + why);
+  if (!nvrtc_available()) throw GpuUnavailable("no usable GPU: ssc was built without NVRTC");
+  cu::check(d->DeviceGet(&device, 0), "cuDeviceGet");
+  cu::check(d->DevicePrimaryCtxRetain(&ctx, device), "cuDevicePrimaryCtxRetain");
+  cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
+  if (options.arch.empty()) {
+    int major = 0, minor = 0;
+    d->DeviceGetAttribute(&major, cu::kAttrComputeCapabilityMajor, device);
+    d->DeviceGetAttribute(&minor, cu::kAttrComputeCapabilityMinor, device);
+    options.arch = fmt::format("sm_{}{}", major, minor);
   }
+  real_size = options.real == "float" ? 4 : 8;
+  sizes = domain_sizes(grid);
+  for (const TensorInfo& t : graph.tensors())
+    if (t.name == "ground_planes") plane_count = t.components / 6;
 
-  std::vector<double> solver_state() const {
-    std::vector<double> s(size_t(batch) * 16);
-    cu::check(d->MemcpyDtoH(s.data(), scratch.at("s_cg").ptr, s.size() * 8), "download solver state");
-    return s;
+  plan = plan_kernels(graph);
+  std::vector<const PlannedKernel*> forward;
+  for (const PlannedKernel& k : plan.forward) forward.push_back(&k);
+  compile_and_load(forward);
+  for (const TensorInfo& t : graph.tensors())
+    tensors.push_back(alloc(size_t(batch) * count(t.domain) * t.components * real_size));
+  upload_grid();
+  allocate_scratch(plan.forward);
+  cg_iterations.assign(batch, 0);
+  use_graphs = options.graphs && !options.profile && !graphs_disabled_by_env() && d->has_graphs() &&
+               d->StreamCreate(&capture_stream, cu::kStreamNonBlocking) == 0;
+  if (!use_graphs) capture_stream = nullptr;
+}
+
+void GpuTimestep::Impl::ensure_adjoint() {
+  if (adjoint_ready) return;
+  std::vector<const PlannedKernel*> adjoint;
+  for (const PlannedKernel& k : plan.adjoint) adjoint.push_back(&k);
+  compile_and_load(adjoint);
+  allocate_scratch(plan.adjoint);
+  for (const TensorInfo& t : graph.tensors())
+    adjoints.push_back(alloc(size_t(batch) * count(t.domain) * t.components * real_size));
+  adjoint_cg_iterations.assign(batch, 0);
+  adjoint_ready = true;
+}
+
+size_t GpuTimestep::Impl::extent_count(Extent e, long len) const {
+  switch (e) {
+    case Extent::One: return 1;
+    case Extent::Cell: return sizes.cell;
+    case Extent::Node: return sizes.node;
+    case Extent::Point: return sizes.point;
+    case Extent::Band: return sizes.band;
+    case Extent::Len: return size_t(len);
+    case Extent::Item: return 1;
   }
+  return 0;
+}
 
-  // Jacobi-PCG on x (length len per batch item) with b and inv_diag already in v_b,
-  // v_inv_diag; apply(p, q, gate) launches q = A p (gate != 0: skipped for items whose
-  // solve has stopped). Per iteration: the apply kernels and one block-per-item
-  // pcg_iterate. The host reads the solver state every check_every iterations; the
-  // iterations in between form one graph segment (`tag`). Returns the iterations per item.
-  std::vector<int> pcg(cu::DevicePtr x, long len, double tol, int max_it,
-                       const std::function<void(cu::DevicePtr, cu::DevicePtr, int)>& apply, const char* what,
-                       const std::string& tag, const PlannedKernel* whole_loop = nullptr) {
-    Call c;
-    c.len = len;
-    c.values = {{"tol", tol}, {"max_it", double(max_it)}};
-    const cu::DevicePtr r = scratch.at("v_r").ptr, z = scratch.at("v_z").ptr, p = scratch.at("v_p").ptr,
-                        q = scratch.at("v_q").ptr, b = scratch.at("v_b").ptr, inv = scratch.at("v_inv_diag").ptr;
-    c.vectors = {{"v_x", x}, {"v_b", b}, {"v_r", r}, {"v_z", z}, {"v_p", p}, {"v_q", q}, {"v_inv_diag", inv}};
-    const PlannedKernel& iterate = kernel("pcg_iterate");
-    if (recording()) {
-      apply(x, q, 0);
-      launch(kernel("pcg_start"), c);
-    }
-    const int check_every = std::max(1, options.check_every);
-    std::vector<double> s;
-    if (whole_loop) {  // one block per item runs the loop to its end: one check
-      if (recording()) launch(*whole_loop, c);
-      close_segment();
-      s = solver_state();
-    }
-    for (int it = 0; !whole_loop; it += check_every) {
-      if (it > 0) open_segment(tag + "/chunk");
-      if (recording())
-        for (int k = 0; k < check_every; ++k) {
-          apply(p, q, 1);
-          launch(iterate, c);
+void GpuTimestep::Impl::launch(const PlannedKernel& k, const Call& call) {
+  if (replaying) return;  // the open segment is replayed from its graph
+  const size_t n = extent_count(k.extent, call.len);
+  if (n == 0 || batch == 0) return;
+  Pending pl;
+  pl.kernel = &k;
+  pl.function = functions.at(k.name);
+  std::vector<unsigned long long>& slots = pl.slots;
+  slots.reserve(8 + k.params.size());
+  auto put_int = [&](long v) {
+    unsigned long long s = 0;
+    const int i = int(v);
+    std::memcpy(&s, &i, 4);
+    slots.push_back(s);
+  };
+  auto put_double = [&](double v) {
+    unsigned long long s = 0;
+    std::memcpy(&s, &v, 8);
+    slots.push_back(s);
+  };
+  auto put_real = [&](double v) {
+    if (real_size == 8) return put_double(v);
+    unsigned long long s = 0;
+    const float f = float(v);
+    std::memcpy(&s, &f, 4);
+    slots.push_back(s);
+  };
+  put_int(sizes.cell);
+  put_int(sizes.node);
+  put_int(sizes.point);
+  put_int(sizes.band);
+  put_int(plane_count);
+  put_int(batch);
+  put_real(grid.h);
+  for (const KernelParam& p : k.params) {
+    switch (p.kind) {
+      case KernelParam::Kind::Tensor:
+        slots.push_back(tensors.at(p.tensor).ptr);
+        break;
+      case KernelParam::Kind::Adjoint:
+        if (!adjoint_ready) throw std::logic_error("gpu: cotangent of " + k.name + " before ensure_adjoint()");
+        slots.push_back(adjoints.at(p.tensor).ptr);
+        break;
+      case KernelParam::Kind::Grid:
+        slots.push_back(grid_buffers.at(p.name).ptr);
+        break;
+      case KernelParam::Kind::Scratch:
+        slots.push_back(scratch.at(p.name).ptr);
+        break;
+      case KernelParam::Kind::Vector: {
+        auto it = call.vectors.find(p.name);
+        if (it == call.vectors.end()) throw std::logic_error("gpu: unbound vector " + p.name + " of " + k.name);
+        slots.push_back(it->second);
+        break;
+      }
+      case KernelParam::Kind::Value: {
+        if (p.name == "len") {
+          put_int(call.len);
+          break;
         }
-      close_segment();
-      s = solver_state();
-      bool any = false;
-      for (int k = 0; k < batch; ++k) any |= s[16 * k + 6] != 0.0;
-      if (!any || it > max_it + check_every) break;
-    }
-    open_segment(fmt::format("segment {}", ++segment_count));
-    std::vector<int> iterations(batch);
-    for (int k = 0; k < batch; ++k) {
-      iterations[k] = int(s[16 * k + 7]);
-      if (s[16 * k + 9] == 0.0)
-        throw SimulationError(fmt::format("the {} did not converge on the GPU (batch item {}): relative residual "
-                                          "{:.3g} after {} CG iterations (tolerance {:.3g})",
-                                          what, k, s[16 * k + 8], iterations[k], tol));
-    }
-    return iterations;
-  }
-
-  int tensor_id(const OpNode& op, const char* slot, bool output) const {
-    return output ? op.output(slot) : op.input(slot);
-  }
-
-  void newmark(int o) {
-    const OpNode& op = graph.ops()[o];
-    const cu::DevicePtr u = tensors.at(op.output("u")).ptr, rhs = tensors.at(op.input("rhs")).ptr;
-    launch(kernel("newmark_init"));
-    launch(kernel("newmark_diag"));
-    Call setup;
-    setup.vectors = {{"v_rhs", rhs}, {"v_x", u}, {"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
-    setup.values = {{"zero_x", 0}};
-    launch(kernel("newmark_setup"), setup);
-    const PlannedKernel& cell = kernel("newmark_apply_cell");
-    const PlannedKernel& node = kernel("newmark_apply_node");
-    auto apply = [&](cu::DevicePtr p, cu::DevicePtr q, int gate) {
-      Call a;
-      a.vectors = {{"v_p", p}, {"v_q", q}};
-      a.values = {{"gate", double(gate)}};
-      launch(cell, a);
-      launch(node, a);
-    };
-    cg_iterations = pcg(u, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, apply, "time-step solve",
-                        fmt::format("newmark {}", o));
-    // cg_iterations output (one Real per batch item)
-    std::vector<double> its(cg_iterations.begin(), cg_iterations.end());
-    const std::vector<char> bytes = to_real(its.data(), its.size());
-    cu::check(d->MemcpyHtoD(tensors.at(op.output("cg_iterations")).ptr, bytes.data(), bytes.size()), "upload iterations");
-  }
-
-  void extension(int o) {
-    const OpNode& op = graph.ops()[o];
-    const cu::DevicePtr x = tensors.at(op.output("band_u")).ptr;
-    Call setup;
-    setup.vectors = {{"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
-    launch(kernel("extension_setup"), setup);
-    const PlannedKernel& band = kernel("extension_apply");
-    auto apply = [&](cu::DevicePtr p, cu::DevicePtr q, int gate) {
-      Call a;
-      a.vectors = {{"v_p", p}, {"v_q", q}};
-      a.values = {{"gate", double(gate)}};
-      launch(band, a);
-    };
-    const PlannedKernel* loop = fused_extension_enabled(options.fused_extension) ? plan.find(false, "extension_pcg_loop") : nullptr;
-    pcg(x, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, apply, "displacement extension",
-        fmt::format("extension {}", o), loop);
-  }
-
-  void run() {
-    cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
-    segment_count = 0;
-    open_segment("segment 0");
-    int solved = -1;
-    for (const PlannedKernel& k : plan.forward) {
-      if (k.stage.empty()) {
-        launch(k);
-        continue;
+        auto it = call.values.find(p.name);
+        if (it == call.values.end()) throw std::logic_error("gpu: unbound value " + p.name + " of " + k.name);
+        if (p.type == "double")
+          put_double(it->second);
+        else
+          put_int(long(it->second));
+        break;
       }
-      const int o = k.parts.front().op;
-      if (o == solved) continue;
-      solved = o;
-      if (graph.ops()[o].kind == OpKind::NewmarkSolve)
-        newmark(o);
-      else
-        extension(o);
     }
-    close_segment();
-    cu::check(d->CtxSynchronize(), "forward step");
   }
-};
+  if (k.extent == Extent::Item) {
+    pl.grid_x = 1;
+    pl.block = kItemBlock;
+  } else {
+    pl.grid_x = unsigned((n + kBlock - 1) / kBlock);
+    pl.block = kBlock;
+  }
+  pl.grid_y = unsigned(batch);
+  if (use_graphs)
+    pending.push_back(std::move(pl));
+  else
+    submit(pl, nullptr);
+}
+
+void GpuTimestep::Impl::submit(Pending& pl, cu::Stream stream) {
+  std::vector<void*> args;
+  args.reserve(pl.slots.size());
+  for (unsigned long long& s : pl.slots) args.push_back(&s);
+  const std::string& name = pl.kernel->name;
+  const auto start = std::chrono::steady_clock::now();
+  cu::check(d->LaunchKernel(pl.function, pl.grid_x, pl.grid_y, 1, pl.block, 1, 1, 0, stream, args.data(), nullptr),
+            ("cuLaunchKernel " + name).c_str());
+  if (options.profile) {
+    cu::check(d->CtxSynchronize(), ("kernel " + name).c_str());
+    GpuKernelTiming& t = timing[name];
+    t.name = name;
+    t.launches++;
+    t.ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    t.registers = registers[name];
+  }
+}
+
+// Opens a launch segment named `tag` (graphs only): if it was captured before, the
+// launches until close_segment() are skipped and the graph is replayed instead.
+void GpuTimestep::Impl::open_segment(const std::string& tag) {
+  if (!use_graphs) return;
+  segment_tag = tag;
+  replaying = graph_execs.count(tag) != 0;
+  pending.clear();
+}
+
+// Submits the open segment (on the legacy stream, ordered with the copies).
+void GpuTimestep::Impl::close_segment() {
+  if (!use_graphs) return;
+  if (!replaying && !pending.empty()) {
+    cu::Graph captured = nullptr;
+    cu::check(d->StreamBeginCapture(capture_stream, cu::kCaptureModeThreadLocal), "cuStreamBeginCapture");
+    try {
+      for (Pending& pl : pending) submit(pl, capture_stream);
+    } catch (...) {
+      d->StreamEndCapture(capture_stream, &captured);
+      if (captured) d->GraphDestroy(captured);
+      pending.clear();
+      throw;
+    }
+    cu::check(d->StreamEndCapture(capture_stream, &captured), "cuStreamEndCapture");
+    graph_list.push_back(captured);
+    cu::GraphExec exec = nullptr;
+    cu::check(d->GraphInstantiate(&exec, captured, 0), "cuGraphInstantiate");
+    graph_execs[segment_tag] = exec;
+  }
+  auto it = graph_execs.find(segment_tag);
+  if (it != graph_execs.end()) cu::check(d->GraphLaunch(it->second, nullptr), "cuGraphLaunch");
+  pending.clear();
+  replaying = false;
+}
+
+const PlannedKernel& GpuTimestep::Impl::kernel(const std::string& label, bool adjoint) const {
+  const PlannedKernel* k = plan.find(adjoint, label);
+  if (!k) throw std::logic_error("gpu: the plan has no kernel " + label);
+  return *k;
+}
+
+std::vector<double> GpuTimestep::Impl::solver_state() const {
+  std::vector<double> s(size_t(batch) * 16);
+  cu::check(d->MemcpyDtoH(s.data(), scratch.at("s_cg").ptr, s.size() * 8), "download solver state");
+  return s;
+}
+
+// Jacobi-PCG on x (length len per batch item) with b and inv_diag already in v_b,
+// v_inv_diag; apply(p, q, gate) launches q = A p (gate != 0: skipped for items whose
+// solve has stopped). Per iteration: the apply kernels and one block-per-item
+// pcg_iterate. The host reads the solver state every check_every iterations; the
+// iterations in between form one graph segment (`tag`). Returns the iterations per item.
+std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, int max_it, const Apply& apply,
+                                        const char* what, const std::string& tag, const PlannedKernel* whole_loop) {
+  Call c;
+  c.len = len;
+  c.values = {{"tol", tol}, {"max_it", double(max_it)}};
+  const cu::DevicePtr r = scratch.at("v_r").ptr, z = scratch.at("v_z").ptr, p = scratch.at("v_p").ptr,
+                      q = scratch.at("v_q").ptr, b = scratch.at("v_b").ptr, inv = scratch.at("v_inv_diag").ptr;
+  c.vectors = {{"v_x", x}, {"v_b", b}, {"v_r", r}, {"v_z", z}, {"v_p", p}, {"v_q", q}, {"v_inv_diag", inv}};
+  const PlannedKernel& iterate = kernel("pcg_iterate");
+  if (recording()) {
+    apply(x, q, 0);
+    launch(kernel("pcg_start"), c);
+  }
+  const int check_every = std::max(1, options.check_every);
+  std::vector<double> s;
+  if (whole_loop) {  // one block per item runs the loop to its end: one check
+    if (recording()) launch(*whole_loop, c);
+    close_segment();
+    s = solver_state();
+  }
+  for (int it = 0; !whole_loop; it += check_every) {
+    if (it > 0) open_segment(tag + "/chunk");
+    if (recording())
+      for (int k = 0; k < check_every; ++k) {
+        apply(p, q, 1);
+        launch(iterate, c);
+      }
+    close_segment();
+    s = solver_state();
+    bool any = false;
+    for (int k = 0; k < batch; ++k) any |= s[16 * k + 6] != 0.0;
+    if (!any || it > max_it + check_every) break;
+  }
+  open_segment(fmt::format("{} {}", segment_prefix, ++segment_count));
+  std::vector<int> iterations(batch);
+  for (int k = 0; k < batch; ++k) {
+    iterations[k] = int(s[16 * k + 7]);
+    if (s[16 * k + 9] == 0.0)
+      throw SimulationError(fmt::format("the {} did not converge on the GPU (batch item {}): relative residual "
+                                        "{:.3g} after {} CG iterations (tolerance {:.3g})",
+                                        what, k, s[16 * k + 8], iterations[k], tol));
+  }
+  return iterations;
+}
+
+// One Real per batch item.
+void GpuTimestep::Impl::write_iterations(int tensor, const std::vector<int>& iterations) {
+  const std::vector<double> its(iterations.begin(), iterations.end());
+  const std::vector<char> bytes = to_real(its.data(), its.size());
+  cu::check(d->MemcpyHtoD(tensors.at(tensor).ptr, bytes.data(), bytes.size()), "upload iterations");
+}
+
+// ---- GpuTimestep ----
 
 GpuTimestep::GpuTimestep(const Graph& graph, const SimGrid& grid, int batch, const SolverOptions& solver,
                          const GpuOptions& options)
@@ -562,25 +482,52 @@ void GpuTimestep::upload(const TensorStore<double>& store) {
 void GpuTimestep::run() { impl_->run(); }
 
 void GpuTimestep::download(TensorStore<double>& store) const {
+  for (size_t t = 0; t < impl_->graph.tensors().size(); ++t) download(store, int(t));
+}
+
+void GpuTimestep::download(TensorStore<double>& store, int tensor) const {
   const Impl& m = *impl_;
-  for (size_t t = 0; t < m.graph.tensors().size(); ++t) {
-    std::vector<double>& v = store.all(int(t));
-    std::vector<char> bytes(v.size() * m.real_size);
-    if (bytes.empty()) continue;
-    cu::check(m.d->MemcpyDtoH(bytes.data(), m.tensors[t].ptr, bytes.size()), "download tensor");
-    for (size_t i = 0; i < v.size(); ++i) {
-      if (m.real_size == 8)
-        std::memcpy(&v[i], bytes.data() + 8 * i, 8);
-      else {
-        float f;
-        std::memcpy(&f, bytes.data() + 4 * i, 4);
-        v[i] = f;
-      }
-    }
-  }
+  std::vector<double>& v = store.all(tensor);
+  std::vector<char> bytes(v.size() * m.real_size);
+  if (bytes.empty()) return;
+  cu::check(m.d->MemcpyDtoH(bytes.data(), m.tensors.at(tensor).ptr, bytes.size()), "download tensor");
+  m.from_real(bytes, v.data(), v.size());
+}
+
+void GpuTimestep::clear_adjoints(bool including_inputs) {
+  Impl& m = *impl_;
+  cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
+  m.ensure_adjoint();
+  if (including_inputs) m.fresh_backward = true;
+  for (size_t t = 0; t < m.graph.tensors().size(); ++t)
+    if (including_inputs || m.graph.tensor(int(t)).role != TensorInfo::Role::Input)
+      cu::check(m.d->MemsetD8(m.adjoints[t].ptr, 0, m.adjoints[t].bytes), "clear cotangents");
+}
+
+void GpuTimestep::set_adjoint(int tensor, const std::vector<double>& all_items) {
+  Impl& m = *impl_;
+  m.ensure_adjoint();
+  const std::vector<char> bytes = m.to_real(all_items.data(), all_items.size());
+  if (bytes.size() > m.adjoints.at(tensor).bytes) throw std::logic_error("gpu: set_adjoint size mismatch");
+  if (!bytes.empty()) cu::check(m.d->MemcpyHtoD(m.adjoints[tensor].ptr, bytes.data(), bytes.size()), "upload cotangent");
+}
+
+void GpuTimestep::get_adjoint(int tensor, std::vector<double>& all_items) const {
+  const Impl& m = *impl_;
+  if (!m.adjoint_ready) throw std::logic_error("gpu: get_adjoint before any adjoint step");
+  std::vector<char> bytes(all_items.size() * m.real_size);
+  if (bytes.empty()) return;
+  cu::check(m.d->MemcpyDtoH(bytes.data(), m.adjoints.at(tensor).ptr, bytes.size()), "download cotangent");
+  m.from_real(bytes, all_items.data(), all_items.size());
+}
+
+void GpuTimestep::run_adjoint() {
+  impl_->ensure_adjoint();
+  impl_->run_adjoint();
 }
 
 const std::vector<int>& GpuTimestep::cg_iterations() const { return impl_->cg_iterations; }
+const std::vector<int>& GpuTimestep::adjoint_cg_iterations() const { return impl_->adjoint_cg_iterations; }
 double GpuTimestep::compile_seconds() const { return impl_->compile_s; }
 int GpuTimestep::kernel_count() const { return int(impl_->functions.size()); }
 std::vector<GpuKernelTiming> GpuTimestep::timings() const {

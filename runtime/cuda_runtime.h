@@ -1,19 +1,22 @@
-// One forward timestep of a graph on the GPU, from generated kernels (codegen/) compiled
-// with NVRTC (runtime/nvrtc_compiler.h) and launched through the driver API
-// (runtime/cuda_driver.h).
+// One timestep of a graph on the GPU, forward and adjoint, from generated kernels
+// (codegen/) compiled with NVRTC (runtime/nvrtc_compiler.h) and launched through the
+// driver API (runtime/cuda_driver.h).
 //
 // The constructor plans the graph, compiles every forward kernel in parallel (cached),
 // loads the modules and uploads the static grid data (cell nodes, volume weights, the
 // node<-(cell, corner) and node<-(point, side) incidence lists, band neighbours, and a
-// node<-band list built here). run() launches the planned kernels in order; an opaque
-// solve becomes the Jacobi-PCG kernel sequence (element apply, node gather, and per
-// iteration one block-per-item kernel doing the dot products, scalars, axpys and the
-// direction update), every item of the batch frozen on the device at the iteration where
-// its convergence test passes, with a host check of the solver state every `check_every`
+// node<-band list built here); the adjoint kernels and the cotangent buffers follow on
+// first use of the adjoint. run() launches the planned kernels in order; an opaque solve
+// becomes the Jacobi-PCG kernel sequence (element apply, node gather, and per iteration
+// one block-per-item kernel doing the dot products, scalars, axpys and the direction
+// update), every item of the batch frozen on the device at the iteration where its
+// convergence test passes, with a host check of the solver state every `check_every`
 // iterations. The launches between two host checks are captured once as a CUDA graph and
-// replayed. Dot products are summed in double in a fixed order (per-thread strided sums,
-// then a fixed block tree): not the interpreter's order, but the same bits run to run.
-// No atomics.
+// replayed. run_adjoint() does the same with the adjoint plan, on the forward values left
+// on the device by the last run(): cotangents of the step's outputs in, cotangents of its
+// inputs and state out, parameter cotangents accumulated over a backward pass. Dot
+// products are summed in double in a fixed order (per-thread strided sums, then a fixed
+// block tree): not the interpreter's order, but the same bits run to run. No atomics.
 #pragma once
 #include <map>
 #include <memory>
@@ -72,16 +75,29 @@ class GpuTimestep {
   void upload(const TensorStore<double>& store);
   // One forward step; throws SimulationError if a solve does not converge.
   void run();
-  // Copies every tensor back (converted to double).
+  // Copies every tensor back (converted to double), or one tensor (all batch items).
   void download(TensorStore<double>& store) const;
+  void download(TensorStore<double>& store, int tensor) const;
+
+  // Adjoint of the step that the last run() computed (the forward values stay on the
+  // device). clear_adjoints(true) zeroes every cotangent and starts a backward pass;
+  // clear_adjoints(false), once per step, keeps the inputs' (parameter) cotangents, which
+  // accumulate. set_adjoint seeds a tensor's cotangent (all batch items, as the store's
+  // layout); get_adjoint reads one back.
+  void clear_adjoints(bool including_inputs);
+  void set_adjoint(int tensor, const std::vector<double>& all_items);
+  void get_adjoint(int tensor, std::vector<double>& all_items) const;
+  // One adjoint step; throws SimulationError if an adjoint solve does not converge.
+  void run_adjoint();
 
   const std::vector<int>& cg_iterations() const;
+  const std::vector<int>& adjoint_cg_iterations() const;  // of the last run_adjoint()'s time-step solve
   std::vector<GpuKernelTiming> timings() const;  // per kernel, with options.profile
   double compile_seconds() const;
   int kernel_count() const;
 
  private:
-  struct Impl;
+  struct Impl;  // runtime/cuda_timestep_impl.h
   std::unique_ptr<Impl> impl_;
 };
 

@@ -4,8 +4,7 @@
 //    fusion and cut rules, no atomics, run-time values absent from the source;
 //  - NvrtcCompile: every forward and adjoint kernel of the example graphs compiles for
 //    sm_90 in double and float (skipped without NVRTC), the cache and its keys;
-//  - GpuForward: one forward step on the GPU against the interpreter, and determinism
-//    (skipped without a usable GPU).
+// The generated kernels run on a GPU in tests/test_gpu.cpp.
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -28,22 +27,12 @@
 #include "models/sim/timestep_graph.h"
 #include "runtime/cuda_runtime.h"
 #include "runtime/nvrtc_compiler.h"
+#include "tests/gpu_test_support.h"
 
 namespace ssc {
 namespace {
 
 namespace fs = std::filesystem;
-
-// One kernel cache per test process, shared by the tests of this file.
-const std::string& test_cache_root() {
-  static const std::string dir = [] {
-    const fs::path p = fs::temp_directory_path() / ("ssc-test-kernels-" + std::to_string(getpid()));
-    fs::create_directories(p);
-    setenv("SSC_KERNEL_CACHE", p.c_str(), 1);
-    return p.string();
-  }();
-  return dir;
-}
 
 std::string read_text(const fs::path& p) {
   std::ifstream in(p);
@@ -106,10 +95,6 @@ TEST(CodegenSource, NoAtomicsAndLineDirectives) {
   EXPECT_NE(prelude.find("#line 1 \"ops/elasticity.h\""), std::string::npos);
   EXPECT_NE(prelude.find("typedef double Real;"), std::string::npos);
   EXPECT_NE(kernel_prelude({"float", 128}).find("typedef float Real;"), std::string::npos);
-}
-
-Scene torus_scene(const std::vector<std::string>& overrides = {}) {
-  return load_scene(std::string(SSC_SOURCE_DIR) + "/examples/torus.json", overrides);
 }
 
 TEST(CodegenSource, RunTimeValuesAreParameters) {
@@ -230,134 +215,3 @@ TEST(NvrtcCompile, PtxasLogParsing) {
 }  // namespace
 }  // namespace ssc
 
-// ---- GPU (skipped without a usable GPU) ----
-
-namespace ssc {
-namespace {
-
-#define SKIP_WITHOUT_GPU()                                                   \
-  do {                                                                       \
-    const std::string why = gpu_unavailable_reason();                        \
-    if (!why.empty()) GTEST_SKIP() << why;                                   \
-  } while (0)
-
-void gpu_vs_interpreter(const std::string& real, double tolerance) {
-  const Scene scene = torus_scene();
-  const SimGrid grid = build_body_grid(scene);
-  Simulation sim(scene, grid, 2, true);
-  PhysicalParameters p = sim.parameters(1);
-  p.youngs_modulus *= 1.7;  // batch items differ
-  p.linear_velocity = Eigen::Vector3d(0.3, -1.0, 0.2);
-  sim.set_parameters(1, p);
-  for (int s = 0; s < 3; ++s) sim.step();  // a deformed, moving state
-  Interpreter<double>& cpu = sim.interpreter();
-  TensorStore<double> before = cpu.store();
-  SolverOptions so = cpu.options();
-  GpuOptions go;
-  go.real = real;
-  GpuTimestep gpu(cpu.graph(), grid, 2, so, go);
-  gpu.upload(before);
-  gpu.run();
-  TensorStore<double> got = before;
-  gpu.download(got);
-  cpu.run();
-  // The step's outputs (u, v, band_u) against the tolerance; intermediates are printed:
-  // the offset force -R K (R^T x - x) cancels for small rotations, so its relative error
-  // is that of R (a few ULP from cbrt) amplified, not a property of the generated code.
-  std::string which, all;
-  double err = 0;
-  for (size_t t = 0; t < cpu.graph().tensors().size(); ++t) {
-    const TensorInfo& info = cpu.graph().tensor(int(t));
-    if (info.role != TensorInfo::Role::Intermediate) continue;
-    const std::vector<double>& x = cpu.store().all(int(t));
-    const std::vector<double>& y = got.all(int(t));
-    double diff = 0, norm = 0;
-    for (size_t i = 0; i < x.size(); ++i) {
-      diff = std::max(diff, std::abs(x[i] - y[i]));
-      norm = std::max(norm, std::abs(x[i]));
-    }
-    const double rel = norm > 0 ? diff / norm : diff;
-    all += fmt::format(" {}={:.2g}", info.name, rel);
-    if ((info.name == "u" || info.name == "v" || info.name == "band_u") && rel >= err) {
-      err = rel;
-      which = info.name;
-    }
-  }
-  std::printf("[ %s ] per-tensor relative error:%s\n", real.c_str(), all.c_str());
-  std::printf("[ %s ] GPU vs interpreter: worst relative error %.3g (%s); CG iterations GPU %d/%d, CPU %d/%d; "
-              "compile %.2f s for %d kernels\n",
-              real.c_str(), err, which.c_str(), gpu.cg_iterations()[0], gpu.cg_iterations()[1],
-              cpu.report().cg_iterations[0], cpu.report().cg_iterations[1], gpu.compile_seconds(), gpu.kernel_count());
-  EXPECT_LT(err, tolerance) << which;
-  // Determinism: a second run from the same inputs is bitwise equal.
-  gpu.upload(before);
-  gpu.run();
-  TensorStore<double> again = before;
-  gpu.download(again);
-  for (size_t t = 0; t < cpu.graph().tensors().size(); ++t)
-    EXPECT_TRUE(again.all(int(t)) == got.all(int(t))) << cpu.graph().tensor(int(t)).name;
-}
-
-TEST(GpuForward, DoubleMatchesInterpreter) {
-  SKIP_WITHOUT_GPU();
-  test_cache_root();
-  gpu_vs_interpreter("double", 1e-10);
-}
-
-TEST(GpuForward, FloatMatchesInterpreter) {
-  SKIP_WITHOUT_GPU();
-  test_cache_root();
-  gpu_vs_interpreter("float", 1e-4);
-}
-
-TEST(GpuForward, ReportsMissingGpuCleanly) {
-  const std::string why = gpu_unavailable_reason();
-  if (why.empty()) GTEST_SKIP() << "a GPU is present: " << gpu_description();
-  EXPECT_EQ(why.rfind("no usable GPU: ", 0), 0u) << why;
-  const TimestepGraph t = build_timestep_graph(0, false);
-  SimGrid grid;
-  try {
-    GpuTimestep gpu(t.graph, grid, 1, SolverOptions{});
-    FAIL() << "expected GpuUnavailable";
-  } catch (const GpuUnavailable& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("no usable GPU: ", 0), 0u) << e.what();
-  }
-}
-
-}  // namespace
-}  // namespace ssc
-
-namespace ssc {
-namespace {
-
-TEST(GpuForward, ProfileTorusStep) {
-  SKIP_WITHOUT_GPU();
-  test_cache_root();
-  const Scene scene = torus_scene();
-  const SimGrid grid = build_body_grid(scene);
-  Simulation sim(scene, grid, 1, true);
-  for (int s = 0; s < 2; ++s) sim.step();
-  for (const char* real : {"double", "float"}) {
-    GpuOptions go;
-    go.real = real;
-    go.profile = true;
-    GpuTimestep gpu(sim.interpreter().graph(), grid, 1, sim.interpreter().options(), go);
-    gpu.upload(sim.interpreter().store());
-    gpu.run();
-    go.profile = false;
-    GpuTimestep fast(sim.interpreter().graph(), grid, 1, sim.interpreter().options(), go);
-    fast.upload(sim.interpreter().store());
-    fast.run();
-    const auto start = std::chrono::steady_clock::now();
-    for (int k = 0; k < 5; ++k) fast.run();
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / 5;
-    std::printf("[ %s ] torus forward step on %s: %.3f ms (unprofiled, %d CG iterations)\n", real,
-                gpu_description().c_str(), ms, fast.cg_iterations()[0]);
-    for (const GpuKernelTiming& t : gpu.timings())
-      std::printf("  %-7s %-52s %5d launches %8.4f ms/launch %4d regs\n", real, t.name.c_str(), t.launches,
-                  t.ms / t.launches, t.registers);
-  }
-}
-
-}  // namespace
-}  // namespace ssc

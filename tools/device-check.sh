@@ -2,6 +2,7 @@
 # Builds ssc on a GPU machine (Ubuntu 24.04, CUDA 13, CMake >= 3.20, no network needed)
 # into build-gpu/, runs the code-generator and GPU tests, any benchmark binary, and
 # prints a short summary table last. Usage: tools/device-check.sh [extra gtest filter]
+#   BENCH=regex   only the benchmarks matching it (default: all); BENCH= skips them
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -31,9 +32,10 @@ echo "== tests: $FILTER"
 test_rc=${PIPESTATUS[0]}
 
 bench_rc=-
-if [ -x "$BUILD/bin/ssc_bench" ]; then
-  echo "== benchmarks"
-  "$BUILD/bin/ssc_bench" --benchmark_min_time=0.05s 2>&1 | tee "$LOG/bench.txt"
+BENCH=${BENCH-.}
+if [ -x "$BUILD/bin/ssc_bench" ] && [ -n "$BENCH" ]; then
+  echo "== benchmarks ($BENCH)"
+  "$BUILD/bin/ssc_bench" --benchmark_min_time=0.05s --benchmark_filter="$BENCH" 2>&1 | tee "$LOG/bench.txt"
   bench_rc=${PIPESTATUS[0]}
 fi
 

@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <random>
 
 #include "models/io/errors.h"
@@ -18,9 +19,35 @@ PhysicalParameters with_values(PhysicalParameters p, const std::vector<std::stri
   return p;
 }
 
+// The batched simulation of the last round, kept while the number of active starts stays
+// the same, so that a GPU's modules, buffers and captured graphs are set up once.
+class BatchSimulations {
+ public:
+  BatchSimulations(const Problem& problem, const std::string& device) : problem_(problem), gpu_(device == "cuda") {}
+  Simulation& batch(int n) {
+    if (!batch_ || batch_->batch() != n) {
+      batch_.reset();
+      batch_ = make(n);
+    }
+    return *batch_;
+  }
+  void forget() { batch_.reset(); }  // after a failure: no half-run state carries over
+  std::unique_ptr<Simulation> make(int n) const {
+    auto sim = std::make_unique<Simulation>(problem_.scene, problem_.grid, n, true);
+    if (gpu_) sim->use_gpu();
+    return sim;
+  }
+
+ private:
+  const Problem& problem_;
+  bool gpu_;
+  std::unique_ptr<Simulation> batch_;
+};
+
 // Evaluates the starts in `items` as one batch; on a simulation failure, one by one so
 // that only the failing starts are dropped. Returns false for a failed item.
-std::vector<bool> evaluate_batch(const Problem& problem, const SurfaceConstraintCost& cost, const PhysicalParameters& base,
+std::vector<bool> evaluate_batch(BatchSimulations& sims, const Problem& problem, const SurfaceConstraintCost& cost,
+                                 const PhysicalParameters& base,
                                  const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& points,
                                  std::vector<CostGradient>* results, std::vector<std::string>* failures,
                                  bool gradient = true) {
@@ -31,11 +58,12 @@ std::vector<bool> evaluate_batch(const Problem& problem, const SurfaceConstraint
   results->assign(n, CostGradient{});
   failures->assign(n, "");
   try {
-    Simulation sim(problem.scene, problem.grid, n, true);
+    Simulation& sim = sims.batch(n);
     for (int i = 0; i < n; ++i) sim.set_parameters(i, with_values(base, names, points[i]));
     *results = evaluate_cost_gradient(sim, cost, problem.frames, options);
     return ok;
   } catch (const SimulationError& e) {
+    sims.forget();
     if (n == 1) {
       ok[0] = false;
       (*failures)[0] = e.what();
@@ -44,9 +72,9 @@ std::vector<bool> evaluate_batch(const Problem& problem, const SurfaceConstraint
   }
   for (int i = 0; i < n; ++i) {
     try {
-      Simulation sim(problem.scene, problem.grid, 1, true);
-      sim.set_parameters(0, with_values(base, names, points[i]));
-      (*results)[i] = evaluate_cost_gradient(sim, cost, problem.frames, options)[0];
+      const std::unique_ptr<Simulation> sim = sims.make(1);
+      sim->set_parameters(0, with_values(base, names, points[i]));
+      (*results)[i] = evaluate_cost_gradient(*sim, cost, problem.frames, options)[0];
     } catch (const SimulationError& e) {
       ok[i] = false;
       (*failures)[i] = e.what();
@@ -104,6 +132,7 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
   const ParameterSpace space(axes);
   const std::vector<Eigen::VectorXd> initial = sample_starts(space, result.nominal, o);
   const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
+  BatchSimulations sims(problem, o.device);
 
   const int S = int(initial.size());
   std::vector<std::unique_ptr<Optimizer>> opt;
@@ -122,7 +151,7 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
     std::vector<CostGradient> values;
     std::vector<std::string> failures;
     const std::vector<bool> ok =
-        evaluate_batch(problem, cost, base, result.names, points, &values, &failures, !o.finite_differences);
+        evaluate_batch(sims, problem, cost, base, result.names, points, &values, &failures, !o.finite_differences);
     result.evaluations += int(active.size());
     // The comparison the paper makes: central differences in the optimiser's coordinates
     // instead of the adjoint, all 2 x parameters x starts probes as one batch.
@@ -140,7 +169,7 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
       std::vector<CostGradient> probe_values;
       std::vector<std::string> probe_failures;
       const std::vector<bool> probe_ok =
-          evaluate_batch(problem, cost, base, result.names, probes, &probe_values, &probe_failures, false);
+          evaluate_batch(sims, problem, cost, base, result.names, probes, &probe_values, &probe_failures, false);
       result.evaluations += int(probes.size());
       for (size_t k = 0; k < active.size(); ++k) {
         fd_gradient[k].resize(space.size());

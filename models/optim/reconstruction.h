@@ -30,6 +30,7 @@ struct ReconstructionOptions {
   std::vector<Eigen::VectorXd> initial_values;  // overrides the sampling when non-empty (one per start)
   bool finite_differences = false;  // central differences instead of the adjoint (for comparison)
   double fd_step = 1e-4;            // in the optimiser's internal coordinates (log space: 0.01 %)
+  std::string device = "cpu";       // "cuda": simulations and adjoints on the GPU (Simulation::use_gpu)
 };
 
 struct StartRecord {

@@ -5,6 +5,8 @@
 #include <map>
 #include <stdexcept>
 
+#include "runtime/cuda_runtime.h"
+
 namespace ssc {
 namespace {
 
@@ -84,9 +86,14 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
   }
   if (!options.gradient) return results;
 
+  // The backward pass runs where the steps run: the interpreter's adjoint, or the
+  // generated adjoint kernels on the GPU (cotangents stay on the device between steps
+  // except the state's, which pass through the host with the frame seeds).
   Interpreter<double>& in = sim.interpreter();
   TensorStore<double>& adj = in.adjoint();
+  GpuTimestep* gpu = sim.gpu();
   in.clear_adjoints(true);
+  if (gpu) gpu->clear_adjoints(true);
   const size_t n3 = 3 * size_t(g.node_count), b3 = 3 * size_t(g.band_count);
   std::vector<std::vector<double>> u_bar(B, std::vector<double>(n3, 0.0)), v_bar(B, std::vector<double>(n3, 0.0));
   // States of the current checkpoint segment, recomputed on entry.
@@ -105,7 +112,7 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
       }
     }
     for (int b = 0; b < B; ++b) sim.set_state(b, segment[b].at(t - 1), t - 1);
-    in.run();
+    sim.recompute_step();
     in.clear_adjoints(false);
     for (int b = 0; b < B; ++b) {
       double* ub = adj.data(tg.u, b);
@@ -119,12 +126,22 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
         for (size_t i = 0; i < b3; ++i) bb[i] += it->second.band_bar[i];
       }
     }
-    in.run_adjoint();
+    if (gpu) {
+      gpu->clear_adjoints(false);
+      for (int tensor : {tg.u, tg.v, tg.band_u}) gpu->set_adjoint(tensor, adj.all(tensor));
+      gpu->run_adjoint();
+      for (int tensor : {tg.u_prev, tg.v_prev}) gpu->get_adjoint(tensor, adj.all(tensor));
+    } else {
+      in.run_adjoint();
+    }
     for (int b = 0; b < B; ++b) {
       std::copy_n(adj.data(tg.u_prev, b), n3, u_bar[b].begin());
       std::copy_n(adj.data(tg.v_prev, b), n3, v_bar[b].begin());
     }
   }
+  if (gpu)  // the parameters' cotangents, accumulated on the device over the pass
+    for (size_t t = 0; t < tg.graph.tensors().size(); ++t)
+      if (tg.graph.tensor(int(t)).role == TensorInfo::Role::Input) gpu->get_adjoint(int(t), adj.all(int(t)));
 
   for (int b = 0; b < B; ++b) {
     ParameterGradient& pg = results[b].gradient;

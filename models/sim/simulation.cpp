@@ -149,7 +149,8 @@ void Simulation::step() {
     if (gpu_) {
       gpu_->upload(st);
       gpu_->run();
-      gpu_->download(st);
+      for (int t : {graph_.u, graph_.v, graph_.band_u, graph_.cg_iterations})
+        if (t >= 0) gpu_->download(st, t);
     } else {
       interpreter_->run();
     }
@@ -162,6 +163,15 @@ void Simulation::step() {
     std::copy_n(st.data(graph_.v, b), 3 * grid_.node_count, st.data(graph_.v_prev, b));
     if (graph_.band_u >= 0) std::copy_n(st.data(graph_.band_u, b), 3 * grid_.band_count, st.data(graph_.band_guess, b));
     check_state(b);
+  }
+}
+
+void Simulation::recompute_step() {
+  if (gpu_) {
+    gpu_->upload(interpreter_->store());
+    gpu_->run();
+  } else {
+    interpreter_->run();
   }
 }
 

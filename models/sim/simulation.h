@@ -30,10 +30,12 @@ class Simulation {
   Simulation(const Scene& scene, const SimGrid& grid, int batch = 1, bool extension = false);
   ~Simulation();
 
-  // Runs the forward steps with the generated CUDA kernels (runtime/cuda_runtime.h) instead of
-  // the interpreter; throws GpuUnavailable without a usable GPU. The adjoint stays on the CPU.
+  // Runs the steps with the generated CUDA kernels (runtime/cuda_runtime.h) instead of the
+  // interpreter, forward and (models/sim/gradient.h) adjoint; throws GpuUnavailable without
+  // a usable GPU.
   void use_gpu(const std::string& real = "double");
   bool on_gpu() const { return gpu_ != nullptr; }
+  GpuTimestep* gpu() { return gpu_.get(); }
 
   int batch() const { return interpreter_->batch(); }
   void set_parameters(int b, const PhysicalParameters& p);
@@ -65,6 +67,9 @@ class Simulation {
   };
   State state(int b) const;
   void set_state(int b, const State& s, int step);
+  // Runs the step from the current state again without advancing (the adjoint's
+  // recomputation of a step's intermediates), on whichever device runs the steps.
+  void recompute_step();
   // The centre of mass the initial spin is taken about.
   const Eigen::Vector3d& spin_center() const { return spin_center_; }
 

@@ -1,6 +1,8 @@
-// Per-step benchmarks: forward and forward+adjoint steps on the CPU interpreter, and the
-// generated-kernel forward step on the GPU (when one is usable), for the torus, the
-// dragon and a teddy-sized body, single and batched. Figures go into docs/benchmarks.md.
+// Per-step benchmarks for the torus, the dragon and a teddy-sized body: forward and
+// forward+adjoint steps on the CPU interpreter; on the GPU (when one is usable) the
+// generated forward step, the generated adjoint step, and a whole 10-step J_SSC
+// gradient evaluation per step (host cost, copies and recomputation included), single
+// and batched. Figures go into docs/benchmarks.md.
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -85,6 +87,15 @@ void BM_CpuGradientStep(benchmark::State& state, const std::string& name) {
   report_size(state, b);
 }
 
+// The body advanced 5 steps (deformed, rotated, in contact) in every batch item.
+std::unique_ptr<Simulation> deformed_batch(Body& b, int batch) {
+  auto sim = std::make_unique<Simulation>(b.scene, b.grid, batch, true);
+  Simulation single(b.scene, b.grid, 1, true);
+  for (int i = 0; i < 5; ++i) single.step();
+  for (int k = 0; k < batch; ++k) sim->set_state(k, single.state(0), 5);
+  return sim;
+}
+
 void BM_GpuForwardStep(benchmark::State& state, const std::string& name, const std::string& real) {
   const std::string why = gpu_unavailable_reason();
   if (!why.empty()) {
@@ -93,24 +104,73 @@ void BM_GpuForwardStep(benchmark::State& state, const std::string& name, const s
   }
   Body& b = body(name);
   const int batch = int(state.range(0));
-  Simulation sim(b.scene, b.grid, batch, true);
-  {
-    Simulation single(b.scene, b.grid, 1, true);
-    for (int i = 0; i < 5; ++i) single.step();  // a deformed, rotated state with contact
-    for (int k = 0; k < batch; ++k) sim.set_state(k, single.state(0), 5);
-  }
+  std::unique_ptr<Simulation> sim = deformed_batch(b, batch);
   GpuOptions options;
   options.real = real;
-  SolverOptions solver;
-  solver.cg_tolerance = b.scene.solver.tolerance;
-  solver.extension_tolerance = b.scene.solver.extension_tolerance;
-  GpuTimestep gpu(sim.timestep_graph().graph, b.grid, batch, solver, options);
-  gpu.upload(sim.interpreter().store());
+  GpuTimestep gpu(sim->timestep_graph().graph, b.grid, batch, sim->interpreter().options(), options);
+  gpu.upload(sim->interpreter().store());
   for (auto _ : state) gpu.run();
   report_size(state, b);
   state.counters["cg_iter"] = gpu.cg_iterations().empty() ? 0 : gpu.cg_iterations()[0];
   state.counters["batch"] = batch;
   state.counters["compile_s"] = gpu.compile_seconds();
+}
+
+// One adjoint step on the device (cotangent upload, cold extension start included),
+// after one forward step; the seeds are the step's own u, v and band_u (smooth fields).
+void BM_GpuAdjointStep(benchmark::State& state, const std::string& name, const std::string& real) {
+  const std::string why = gpu_unavailable_reason();
+  if (!why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  Body& b = body(name);
+  const int batch = int(state.range(0));
+  std::unique_ptr<Simulation> sim = deformed_batch(b, batch);
+  const TimestepGraph& tg = sim->timestep_graph();
+  GpuOptions options;
+  options.real = real;
+  GpuTimestep gpu(tg.graph, b.grid, batch, sim->interpreter().options(), options);
+  TensorStore<double>& store = sim->interpreter().store();
+  gpu.upload(store);
+  gpu.run();
+  for (int t : {tg.u, tg.v, tg.band_u}) gpu.download(store, t);
+  for (auto _ : state) {
+    gpu.clear_adjoints(true);
+    for (int t : {tg.u, tg.v, tg.band_u}) gpu.set_adjoint(t, store.all(t));
+    gpu.run_adjoint();
+  }
+  report_size(state, b);
+  state.counters["cg_iter"] = gpu.adjoint_cg_iterations()[0];
+  state.counters["batch"] = batch;
+}
+
+// evaluate_cost_gradient over 10 steps with the steps and the adjoint on the GPU; the
+// reported time is per step (forward, recomputation and adjoint, J_SSC on the host).
+void BM_GpuGradientStep(benchmark::State& state, const std::string& name, const std::string& real) {
+  const std::string why = gpu_unavailable_reason();
+  if (!why.empty()) {
+    state.SkipWithError(why.c_str());
+    return;
+  }
+  Body& b = body(name);
+  const int batch = int(state.range(0));
+  Simulation sim(b.scene, b.grid, batch, true);
+  sim.use_gpu(real);
+  const DeformedSurface surface(b.grid);
+  ObservedFrame frame;
+  frame.step = 10;
+  {
+    Simulation ref(b.scene, b.grid, 1, false);
+    for (int i = 0; i < 10; ++i) ref.step();
+    const auto pos = surface.positions(ref.displacement(0));
+    for (size_t i = 0; i < pos.size(); i += 2) frame.points.push_back(pos[i]);
+  }
+  const SurfaceConstraintCost cost(b.grid, 2 * b.grid.h);
+  for (auto _ : state) benchmark::DoNotOptimize(evaluate_cost_gradient(sim, cost, {frame}));
+  state.counters["step_ms"] = benchmark::Counter(10e-3, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  report_size(state, b);
+  state.counters["batch"] = batch;
 }
 
 void register_all() {
@@ -119,9 +179,15 @@ void register_all() {
         ->Arg(1)->Unit(benchmark::kMillisecond);
     benchmark::RegisterBenchmark(("CpuGradientStep/" + name).c_str(), BM_CpuGradientStep, name)
         ->Unit(benchmark::kMillisecond);
-    for (const std::string real : {"double", "float"})
+    for (const std::string real : {"double", "float"}) {
       benchmark::RegisterBenchmark(("GpuForwardStep/" + name + "/" + real).c_str(), BM_GpuForwardStep, name, real)
           ->Arg(1)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
+      benchmark::RegisterBenchmark(("GpuAdjointStep/" + name + "/" + real).c_str(), BM_GpuAdjointStep, name, real)
+          ->Arg(1)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
+    }
+    benchmark::RegisterBenchmark(("GpuGradientStep/" + name + "/double").c_str(), BM_GpuGradientStep, name,
+                                 std::string("double"))
+        ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
   }
 }
 

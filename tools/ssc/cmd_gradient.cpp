@@ -39,7 +39,6 @@ Command register_gradient(CLI::App& app) {
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres (default: the scene's, else 2 cells)");
   sub->add_flag("--check-fd", o->check_fd, "Also compute central finite differences (tightens the solver tolerances)");
   return [o] {
-    place_gradient_computation(o->device);
     std::vector<std::string> overrides = o->overrides;
     if (o->check_fd) {
       overrides.push_back("solver.tolerance=1e-12");
@@ -47,6 +46,7 @@ Command register_gradient(CLI::App& app) {
     }
     const Problem problem = load_problem(o->scene, overrides, o->observations, o->phi_max);
     Simulation sim(problem.scene, problem.grid, 1, true);
+    place_simulation(sim, o->device);
     const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
     const PhysicalParameters base = sim.parameters(0);
     const std::vector<std::string> names =

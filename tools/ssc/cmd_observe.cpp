@@ -30,7 +30,7 @@ Command register_observe(CLI::App& app) {
     Progress progress("observe", scene.time.steps / spec.every + 1);
     const ObservationSet set = render_observations(
         scene, grid, spec, [&](int done, int) { progress.update(done); },
-        [&](Simulation& sim) { place_forward_simulation(sim, o->device); });
+        [&](Simulation& sim) { place_simulation(sim, o->device); });
     progress.finish();
     write_observations(o->out, set);
     size_t points = 0;

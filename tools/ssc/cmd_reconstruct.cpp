@@ -16,6 +16,7 @@
 #include "models/sim/parameters.h"
 #include "models/sim/problem.h"
 #include "models/sim/units.h"
+#include "runtime/cuda_runtime.h"
 #include "tools/ssc/commands.h"
 #include "tools/ssc/device_option.h"
 #include "tools/ssc/fit_renders.h"
@@ -92,7 +93,7 @@ Command register_reconstruct(CLI::App& app) {
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
   add_device_option(sub, &o->device);
   return [o] {
-    place_gradient_computation(o->device);
+    const std::string device = choose_device(o->device);
     const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max);
     const UnitScales scales = unit_scales(problem.scene, problem.grid);  // checked before the long run
     ReconstructionOptions ro;
@@ -102,6 +103,7 @@ Command register_reconstruct(CLI::App& app) {
     ro.optimizer_options.max_iterations = o->iterations;
     ro.seed = o->seed;
     ro.finite_differences = o->gradient == "fd";
+    ro.device = device;
     make_optimizer(ro.optimizer, Eigen::VectorXd::Zero(1), ro.optimizer_options);  // reject unknown names early
     const std::vector<std::string> names = expand_parameter_names(ro.fit, PhysicalParameters::from_scene(problem.scene));
     OutputDir out(o->out);
@@ -134,7 +136,7 @@ Command register_reconstruct(CLI::App& app) {
     j["seed"] = ro.seed;
     j["evaluations"] = r.evaluations;
     j["wall_seconds"] = r.wall_seconds;
-    j["device"] = "cpu";
+    j["device"] = device == "cuda" ? gpu_description() : "cpu";
     nlohmann::json starts = nlohmann::json::array();
     std::string csv = "start,iteration,cost";
     for (const std::string& n : r.names) csv += "," + n;

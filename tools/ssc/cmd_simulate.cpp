@@ -61,7 +61,7 @@ int run_simulate(const SimulateOptions& o) {
   const SimGrid grid = build_body_grid(scene);
   Simulation sim(scene, grid);
   for (const Eigen::Vector3d& p : probes) sim.probe(0, p);  // reject bad probes before running
-  const std::string device = place_forward_simulation(sim, o.device);
+  const std::string device = place_simulation(sim, o.device);
   const DeformedSurface surface(grid);
   OutputDir out(o.out);
   std::filesystem::create_directories(out.file("frames"));

@@ -62,11 +62,11 @@ Command register_sweep(CLI::App& app) {
                                      "difference), which simulate the truth from --truth")
       ->check(CLI::IsMember({"ssc", "disp", "sdf"}));
   return [o] {
-    place_gradient_computation(o->device);
     SweepRange range = parse_range(o->param);
     if (o->log && (range.lo <= 0 || range.hi <= 0)) throw InputError("--log needs positive LO and HI");
     const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max);
     Simulation sim(problem.scene, problem.grid, 1, true);
+    place_simulation(sim, o->device);
     const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
     const PhysicalParameters base = sim.parameters(0);
     range.name = expand_parameter_names({range.name}, base).at(0);

@@ -14,14 +14,20 @@ void add_device_option(CLI::App* sub, std::string* device) {
       ->check(CLI::IsMember({"cpu", "cuda", "auto"}));
 }
 
-std::string place_forward_simulation(Simulation& sim, const std::string& device) {
+std::string choose_device(const std::string& device) {
   if (device == "cpu") return "cpu";
   const std::string why = gpu_unavailable_reason();
-  if (!why.empty()) {
-    if (device == "cuda") throw InputError("--device cuda: " + why + "; use --device cpu or --device auto");
-    std::fprintf(stderr, "ssc: %s; running on the CPU\n", why.c_str());
-    return "cpu";
+  if (why.empty()) {
+    std::fprintf(stderr, "ssc: running on %s\n", gpu_description().c_str());
+    return "cuda";
   }
+  if (device == "cuda") throw InputError("--device cuda: " + why + "; use --device cpu or --device auto");
+  std::fprintf(stderr, "ssc: %s; running on the CPU\n", why.c_str());
+  return "cpu";
+}
+
+std::string place_simulation(Simulation& sim, const std::string& device) {
+  if (choose_device(device) == "cpu") return "cpu";
   try {
     sim.use_gpu();
   } catch (const GpuUnavailable& e) {
@@ -29,16 +35,7 @@ std::string place_forward_simulation(Simulation& sim, const std::string& device)
     std::fprintf(stderr, "ssc: %s; running on the CPU\n", e.what());
     return "cpu";
   }
-  const std::string name = gpu_description();
-  std::fprintf(stderr, "ssc: running the forward simulation on %s\n", name.c_str());
-  return name;
-}
-
-std::string place_gradient_computation(const std::string& device) {
-  if (device == "cuda")
-    throw InputError("--device cuda: gradients run on the CPU in this version (the generated adjoint kernels are "
-                     "not driven yet); use --device cpu or auto");
-  return "cpu";
+  return gpu_description();
 }
 
 }  // namespace ssc

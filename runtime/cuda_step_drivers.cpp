@@ -1,0 +1,156 @@
+// What one GPU timestep launches (see cuda_runtime.h): the planned kernels in order,
+// forward or adjoint, with each opaque op's solver stage sequence in their place.
+//
+// Forward: newmark_init, diag, setup, then PCG with the element apply (cell kernel,
+// node gather) on u; the extension: setup (rhs from the active neighbours, the guess),
+// PCG with the band Laplacian on band_u.
+// Adjoint (implicit-function adjoints, as runtime/interpreter_adjoint.cpp): the
+// extension's cotangent solve L y = band_u_bar into scratch y (warm-started from the
+// previous, later step's y within one backward pass), the time-step system's
+// A w = u_bar into scratch w from zero; the fused adj_ kernels around them read y and w.
+#include <fmt/format.h>
+
+#include <cstdlib>
+
+#include "models/io/errors.h"
+#include "runtime/cuda_timestep_impl.h"
+
+namespace ssc {
+namespace {
+
+bool fused_extension_enabled(bool option) {
+  const char* e = std::getenv("SSC_GPU_FUSED_EXTENSION");
+  if (e && std::string(e) == "0") return false;
+  if (e && std::string(e) == "1") return true;
+  return option;
+}
+
+std::string scratch_of(const char* key, int op) { return fmt::format("s_{}_op{}", key, op); }
+
+}  // namespace
+
+GpuTimestep::Impl::Apply GpuTimestep::Impl::newmark_apply() {
+  const PlannedKernel& cell = kernel("newmark_apply_cell");
+  const PlannedKernel& node = kernel("newmark_apply_node");
+  return [this, &cell, &node](cu::DevicePtr p, cu::DevicePtr q, int gate) {
+    Call a;
+    a.vectors = {{"v_p", p}, {"v_q", q}};
+    a.values = {{"gate", double(gate)}};
+    launch(cell, a);
+    launch(node, a);
+  };
+}
+
+GpuTimestep::Impl::Apply GpuTimestep::Impl::extension_apply() {
+  const PlannedKernel& band = kernel("extension_apply");
+  return [this, &band](cu::DevicePtr p, cu::DevicePtr q, int gate) {
+    Call a;
+    a.vectors = {{"v_p", p}, {"v_q", q}};
+    a.values = {{"gate", double(gate)}};
+    launch(band, a);
+  };
+}
+
+const PlannedKernel* GpuTimestep::Impl::extension_loop() const {
+  return fused_extension_enabled(options.fused_extension) ? plan.find(false, "extension_pcg_loop") : nullptr;
+}
+
+void GpuTimestep::Impl::newmark(int o) {
+  const OpNode& op = graph.ops()[o];
+  const cu::DevicePtr u = tensors.at(op.output("u")).ptr, rhs = tensors.at(op.input("rhs")).ptr;
+  launch(kernel("newmark_init"));
+  launch(kernel("newmark_diag"));
+  Call setup;
+  setup.vectors = {{"v_rhs", rhs}, {"v_x", u}, {"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
+  setup.values = {{"zero_x", 0}};
+  launch(kernel("newmark_setup"), setup);
+  cg_iterations = pcg(u, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(),
+                      "time-step solve", fmt::format("newmark {}", o));
+  write_iterations(op.output("cg_iterations"), cg_iterations);
+}
+
+void GpuTimestep::Impl::extension(int o) {
+  const OpNode& op = graph.ops()[o];
+  const cu::DevicePtr x = tensors.at(op.output("band_u")).ptr;
+  Call setup;
+  setup.vectors = {{"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
+  launch(kernel("extension_setup"), setup);
+  pcg(x, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, extension_apply(),
+      "displacement extension", fmt::format("extension {}", o), extension_loop());
+}
+
+void GpuTimestep::Impl::run() {
+  cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
+  segment_count = 0;
+  segment_prefix = "segment";
+  open_segment("segment 0");
+  int solved = -1;
+  for (const PlannedKernel& k : plan.forward) {
+    if (k.stage.empty()) {
+      launch(k);
+      continue;
+    }
+    const int o = k.parts.front().op;
+    if (o == solved) continue;
+    solved = o;
+    if (graph.ops()[o].kind == OpKind::NewmarkSolve)
+      newmark(o);
+    else
+      extension(o);
+  }
+  close_segment();
+  cu::check(d->CtxSynchronize(), "forward step");
+}
+
+void GpuTimestep::Impl::adjoint_newmark(int o) {
+  const OpNode& op = graph.ops()[o];
+  const cu::DevicePtr w = scratch.at(scratch_of("w", o)).ptr;
+  launch(kernel("newmark_diag"));
+  Call setup;
+  setup.vectors = {{"v_rhs", adjoints.at(op.output("u")).ptr},
+                   {"v_x", w},
+                   {"v_b", scratch.at("v_b").ptr},
+                   {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
+  setup.values = {{"zero_x", 1}};
+  launch(kernel("newmark_setup"), setup);
+  adjoint_cg_iterations = pcg(w, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(),
+                              "adjoint time-step solve", fmt::format("adjoint newmark {}", o));
+}
+
+void GpuTimestep::Impl::adjoint_extension(int o) {
+  const cu::DevicePtr y = scratch.at(scratch_of("y", o)).ptr;
+  Call setup;
+  setup.vectors = {{"v_x", y}, {"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
+  setup.values = {{"zero_x", fresh_backward ? 1 : 0}};
+  launch(kernel("extension_adj_setup", true), setup);
+  pcg(y, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, extension_apply(),
+      "adjoint displacement extension", fmt::format("adjoint extension {}", o), extension_loop());
+}
+
+void GpuTimestep::Impl::run_adjoint() {
+  cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
+  segment_count = 0;
+  // The first segment holds the extension setup, whose zero_x argument differs between
+  // the first step of a backward pass and the others: one captured graph each.
+  segment_prefix = "adjoint segment";
+  open_segment(fresh_backward ? "adjoint segment 0 (fresh)" : "adjoint segment 0");
+  int solved = -1;
+  for (const PlannedKernel& k : plan.adjoint) {
+    if (k.stage.empty()) {
+      launch(k);
+      continue;
+    }
+    const int o = k.parts.front().op;
+    if (o == solved) continue;
+    solved = o;
+    if (graph.ops()[o].kind == OpKind::NewmarkSolve)
+      adjoint_newmark(o);
+    else
+      adjoint_extension(o);
+  }
+  close_segment();
+  cu::check(d->CtxSynchronize(), "adjoint step");
+  fresh_backward = false;
+}
+
+}  // namespace ssc

@@ -1,0 +1,127 @@
+// The state of a GpuTimestep (cuda_runtime.h), shared by the launch machinery
+// (cuda_runtime.cpp: modules, buffers, argument packing, graph segments, the PCG loop)
+// and the step drivers (cuda_step_drivers.cpp: which kernels a forward and an adjoint
+// step launch, in which order). Internal to runtime/.
+#pragma once
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "codegen/kernel_plan.h"
+#include "runtime/cuda_driver.h"
+#include "runtime/cuda_runtime.h"
+
+namespace ssc {
+namespace gpu_detail {
+
+constexpr int kBlock = 128;
+
+// A kernel launch with its argument slots (each argument in 8 bytes).
+struct Pending {
+  const PlannedKernel* kernel = nullptr;
+  cu::Function function = nullptr;
+  unsigned grid_x = 1, grid_y = 1, block = kBlock;
+  std::vector<unsigned long long> slots;
+};
+
+struct Buffer {
+  cu::DevicePtr ptr = 0;
+  size_t bytes = 0;
+};
+
+// Per-launch bindings of solver vectors and values.
+struct Call {
+  std::map<std::string, cu::DevicePtr> vectors;
+  std::map<std::string, double> values;
+  long len = 0;
+};
+
+}  // namespace gpu_detail
+
+struct GpuTimestep::Impl {
+  using Buffer = gpu_detail::Buffer;
+  using Call = gpu_detail::Call;
+  using Pending = gpu_detail::Pending;
+  using Apply = std::function<void(cu::DevicePtr, cu::DevicePtr, int)>;
+
+  const Graph& graph;
+  const SimGrid& grid;
+  int batch;
+  SolverOptions solver;
+  GpuOptions options;
+  const cu::Driver* d = nullptr;
+  cu::Device device = 0;
+  cu::Context ctx = nullptr;
+  size_t real_size = 8;
+  DomainSizes sizes;
+  int plane_count = 0;
+  KernelPlan plan;
+  std::map<std::string, cu::Module> modules;
+  std::map<std::string, cu::Function> functions;
+  std::map<std::string, int> registers;
+  std::vector<Buffer> tensors;
+  std::vector<Buffer> adjoints;  // cotangent per tensor; allocated with the adjoint kernels
+  std::map<std::string, Buffer> grid_buffers, scratch;
+  std::vector<int> cg_iterations, adjoint_cg_iterations;
+  bool adjoint_ready = false;
+  // The adjoint extension solve starts from the previous (later) step's solution, except
+  // on the first step of a backward pass (as the interpreter does).
+  bool fresh_backward = true;
+  std::map<std::string, GpuKernelTiming> timing;
+  double compile_s = 0;
+  // Launch segments between host checks of the solver state. With graphs, each segment
+  // is captured once (stream capture) under its tag and replayed afterwards: the launch
+  // sequence of a tag never depends on device data, only on the plan and the bindings
+  // (kernel arguments included), which are fixed per tag.
+  bool use_graphs = false;
+  cu::Stream capture_stream = nullptr;
+  std::map<std::string, cu::GraphExec> graph_execs;
+  std::vector<cu::Graph> graph_list;
+  std::string segment_tag;
+  bool replaying = false;  // the open segment has a graph: launches are not recorded
+  std::vector<Pending> pending;
+  int segment_count = 0;
+  std::string segment_prefix = "segment";
+
+  Impl(const Graph& g, const SimGrid& gr, int b, const SolverOptions& s, const GpuOptions& o)
+      : graph(g), grid(gr), batch(b), solver(s), options(o) {}
+  ~Impl();
+
+  // cuda_runtime.cpp: machinery
+  void setup();
+  void ensure_adjoint();  // compiles the adjoint kernels and allocates cotangents, once
+  void compile_and_load(const std::vector<const PlannedKernel*>& kernels);
+  void allocate_scratch(const std::vector<PlannedKernel>& kernels);
+  Buffer alloc(size_t bytes);
+  std::vector<char> to_real(const double* v, size_t n) const;
+  void from_real(const std::vector<char>& bytes, double* v, size_t n) const;
+  void upload_real(const std::string& name, const std::vector<double>& v);
+  void upload_int(const std::string& name, const std::vector<int>& v);
+  void upload_grid();
+  size_t count(Domain dm) const { return size_t(sizes.count(dm)); }
+  size_t extent_count(Extent e, long len) const;
+  void launch(const PlannedKernel& k, const Call& call = {});
+  void submit(Pending& pl, cu::Stream stream);
+  void open_segment(const std::string& tag);
+  bool recording() const { return !replaying; }
+  void close_segment();
+  const PlannedKernel& kernel(const std::string& label, bool adjoint = false) const;
+  std::vector<double> solver_state() const;
+  std::vector<int> pcg(cu::DevicePtr x, long len, double tol, int max_it, const Apply& apply, const char* what,
+                       const std::string& tag, const PlannedKernel* whole_loop = nullptr);
+  void write_iterations(int tensor, const std::vector<int>& iterations);
+
+  // cuda_step_drivers.cpp: what a step launches
+  Apply newmark_apply();
+  Apply extension_apply();
+  const PlannedKernel* extension_loop() const;
+  void newmark(int op);
+  void extension(int op);
+  void run();
+  void adjoint_newmark(int op);
+  void adjoint_extension(int op);
+  void run_adjoint();
+};
+
+}  // namespace ssc

@@ -1,0 +1,286 @@
+// The generated kernels on a GPU against the CPU interpreter (every test here skips
+// without a usable GPU; tools/device-check.sh runs them on the device machine):
+//  - GpuForward: one forward step, double and float, every tensor compared; determinism;
+//    per-kernel profile of the torus step;
+//  - GpuAdjoint: one adjoint step from random cotangents (every input and state
+//    cotangent compared), determinism, and a whole trajectory's gradient per parameter
+//    with the backward pass on the GPU against the interpreter's.
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "models/grid/sim_grid.h"
+#include "models/sim/body.h"
+#include "models/sim/gradient.h"
+#include "models/sim/simulation.h"
+#include "runtime/cuda_runtime.h"
+#include "tests/gpu_test_support.h"
+
+namespace ssc {
+namespace {
+
+void gpu_vs_interpreter(const std::string& real, double tolerance) {
+  const Scene scene = torus_scene();
+  const SimGrid grid = build_body_grid(scene);
+  Simulation sim(scene, grid, 2, true);
+  PhysicalParameters p = sim.parameters(1);
+  p.youngs_modulus *= 1.7;  // batch items differ
+  p.linear_velocity = Eigen::Vector3d(0.3, -1.0, 0.2);
+  sim.set_parameters(1, p);
+  for (int s = 0; s < 3; ++s) sim.step();  // a deformed, moving state
+  Interpreter<double>& cpu = sim.interpreter();
+  TensorStore<double> before = cpu.store();
+  SolverOptions so = cpu.options();
+  GpuOptions go;
+  go.real = real;
+  GpuTimestep gpu(cpu.graph(), grid, 2, so, go);
+  gpu.upload(before);
+  gpu.run();
+  TensorStore<double> got = before;
+  gpu.download(got);
+  cpu.run();
+  // The step's outputs (u, v, band_u) against the tolerance; intermediates are printed:
+  // the offset force -R K (R^T x - x) cancels for small rotations, so its relative error
+  // is that of R (a few ULP from cbrt) amplified, not a property of the generated code.
+  std::string which, all;
+  double err = 0;
+  for (size_t t = 0; t < cpu.graph().tensors().size(); ++t) {
+    const TensorInfo& info = cpu.graph().tensor(int(t));
+    if (info.role != TensorInfo::Role::Intermediate) continue;
+    const std::vector<double>& x = cpu.store().all(int(t));
+    const std::vector<double>& y = got.all(int(t));
+    double diff = 0, norm = 0;
+    for (size_t i = 0; i < x.size(); ++i) {
+      diff = std::max(diff, std::abs(x[i] - y[i]));
+      norm = std::max(norm, std::abs(x[i]));
+    }
+    const double rel = norm > 0 ? diff / norm : diff;
+    all += fmt::format(" {}={:.2g}", info.name, rel);
+    if ((info.name == "u" || info.name == "v" || info.name == "band_u") && rel >= err) {
+      err = rel;
+      which = info.name;
+    }
+  }
+  std::printf("[ %s ] per-tensor relative error:%s\n", real.c_str(), all.c_str());
+  std::printf("[ %s ] GPU vs interpreter: worst relative error %.3g (%s); CG iterations GPU %d/%d, CPU %d/%d; "
+              "compile %.2f s for %d kernels\n",
+              real.c_str(), err, which.c_str(), gpu.cg_iterations()[0], gpu.cg_iterations()[1],
+              cpu.report().cg_iterations[0], cpu.report().cg_iterations[1], gpu.compile_seconds(), gpu.kernel_count());
+  EXPECT_LT(err, tolerance) << which;
+  // Determinism: a second run from the same inputs is bitwise equal.
+  gpu.upload(before);
+  gpu.run();
+  TensorStore<double> again = before;
+  gpu.download(again);
+  for (size_t t = 0; t < cpu.graph().tensors().size(); ++t)
+    EXPECT_TRUE(again.all(int(t)) == got.all(int(t))) << cpu.graph().tensor(int(t)).name;
+}
+
+TEST(GpuForward, DoubleMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  gpu_vs_interpreter("double", 1e-10);
+}
+
+TEST(GpuForward, FloatMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  gpu_vs_interpreter("float", 1e-4);
+}
+
+TEST(GpuForward, ReportsMissingGpuCleanly) {
+  const std::string why = gpu_unavailable_reason();
+  if (why.empty()) GTEST_SKIP() << "a GPU is present: " << gpu_description();
+  EXPECT_EQ(why.rfind("no usable GPU: ", 0), 0u) << why;
+  const TimestepGraph t = build_timestep_graph(0, false);
+  SimGrid grid;
+  try {
+    GpuTimestep gpu(t.graph, grid, 1, SolverOptions{});
+    FAIL() << "expected GpuUnavailable";
+  } catch (const GpuUnavailable& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("no usable GPU: ", 0), 0u) << e.what();
+  }
+}
+
+TEST(GpuForward, ProfileTorusStep) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  const Scene scene = torus_scene();
+  const SimGrid grid = build_body_grid(scene);
+  Simulation sim(scene, grid, 1, true);
+  for (int s = 0; s < 2; ++s) sim.step();
+  for (const char* real : {"double", "float"}) {
+    GpuOptions go;
+    go.real = real;
+    go.profile = true;
+    GpuTimestep gpu(sim.interpreter().graph(), grid, 1, sim.interpreter().options(), go);
+    gpu.upload(sim.interpreter().store());
+    gpu.run();
+    go.profile = false;
+    GpuTimestep fast(sim.interpreter().graph(), grid, 1, sim.interpreter().options(), go);
+    fast.upload(sim.interpreter().store());
+    fast.run();
+    const auto start = std::chrono::steady_clock::now();
+    for (int k = 0; k < 5; ++k) fast.run();
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / 5;
+    std::printf("[ %s ] torus forward step on %s: %.3f ms (unprofiled, %d CG iterations)\n", real,
+                gpu_description().c_str(), ms, fast.cg_iterations()[0]);
+    for (const GpuKernelTiming& t : gpu.timings())
+      std::printf("  %-7s %-52s %5d launches %8.4f ms/launch %4d regs\n", real, t.name.c_str(), t.launches,
+                  t.ms / t.launches, t.registers);
+  }
+}
+
+// ---- adjoint ----
+
+double relative_difference(const std::vector<double>& x, const std::vector<double>& y) {
+  double diff = 0, norm = 0;
+  for (size_t i = 0; i < x.size(); ++i) {
+    diff = std::max(diff, std::abs(x[i] - y[i]));
+    norm = std::max(norm, std::abs(x[i]));
+  }
+  return norm > 0 ? diff / norm : diff;
+}
+
+void adjoint_vs_interpreter(const std::string& real, double tolerance) {
+  const Scene scene = torus_scene();
+  const SimGrid grid = build_body_grid(scene);
+  Simulation sim(scene, grid, 2, true);
+  PhysicalParameters p = sim.parameters(1);
+  p.youngs_modulus *= 0.6;  // batch items differ
+  p.angular_velocity = Eigen::Vector3d(0.5, 2.0, -0.4);
+  sim.set_parameters(1, p);
+  for (int s = 0; s < 4; ++s) sim.step();
+  const TimestepGraph& tg = sim.timestep_graph();
+  Interpreter<double>& cpu = sim.interpreter();
+  GpuOptions go;
+  go.real = real;
+  GpuTimestep gpu(cpu.graph(), grid, 2, cpu.options(), go);
+  gpu.upload(cpu.store());
+  gpu.run();
+  cpu.run();
+  // Random cotangents of the step's outputs.
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  TensorStore<double>& adj = cpu.adjoint();
+  auto seed_both = [&] {
+    cpu.clear_adjoints(true);
+    gpu.clear_adjoints(true);
+    rng.seed(11);
+    for (int t : {tg.u, tg.v, tg.band_u}) {
+      for (double& x : adj.all(t)) x = normal(rng);
+      gpu.set_adjoint(t, adj.all(t));
+    }
+  };
+  seed_both();
+  cpu.run_adjoint();
+  gpu.run_adjoint();
+  std::string which, all;
+  double worst = 0;
+  std::vector<std::vector<double>> first(cpu.graph().tensors().size());
+  for (size_t t = 0; t < cpu.graph().tensors().size(); ++t) {
+    const TensorInfo& info = cpu.graph().tensor(int(t));
+    if (info.role == TensorInfo::Role::Intermediate) continue;
+    first[t] = adj.all(int(t));
+    gpu.get_adjoint(int(t), first[t]);
+    const double rel = relative_difference(adj.all(int(t)), first[t]);
+    all += fmt::format(" {}={:.2g}", info.name, rel);
+    if (rel >= worst) worst = rel, which = info.name;
+  }
+  std::printf("[ %s ] adjoint step, GPU vs interpreter, per input/state cotangent:%s\n", real.c_str(), all.c_str());
+  std::printf("[ %s ] worst %.3g (%s); adjoint CG iterations GPU %d/%d\n", real.c_str(), worst, which.c_str(),
+              gpu.adjoint_cg_iterations()[0], gpu.adjoint_cg_iterations()[1]);
+  EXPECT_LT(worst, tolerance) << which;
+  // Determinism: the same seeds give bitwise the same cotangents.
+  seed_both();
+  gpu.run_adjoint();
+  for (size_t t = 0; t < first.size(); ++t) {
+    if (first[t].empty()) continue;
+    std::vector<double> again(first[t].size());
+    gpu.get_adjoint(int(t), again);
+    EXPECT_TRUE(again == first[t]) << cpu.graph().tensor(int(t)).name;
+  }
+}
+
+TEST(GpuAdjoint, DoubleStepMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  adjoint_vs_interpreter("double", 1e-10);
+}
+
+TEST(GpuAdjoint, FloatStepMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  adjoint_vs_interpreter("float", 1e-3);
+}
+
+// A whole trajectory (12 steps, frames at 4, 8 and 12, contact, checkpointing every 5
+// steps) with a cost linear in u and quadratic in the band: the GPU backward pass against
+// the interpreter's, per parameter.
+TEST(GpuAdjoint, TrajectoryGradientMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  const Scene scene = torus_scene({"solver.tolerance=1e-12", "solver.extension_tolerance=1e-13"});
+  const SimGrid grid = build_body_grid(scene);
+  const FrameCostFunction cost = [&](size_t f, int, const double* u, const double* band, double* ub, double* bb) {
+    FrameCost c;
+    for (int i = 0; i < 3 * grid.node_count; ++i) {
+      const double w = std::sin(0.37 * i + double(f));
+      c.cost += w * u[i];
+      if (ub) ub[i] += w;
+    }
+    for (int i = 0; i < 3 * grid.band_count; ++i) {
+      c.cost += 0.5 * band[i] * band[i];
+      if (bb) bb[i] += band[i];
+    }
+    return c;
+  };
+  GradientOptions options;
+  options.checkpoint_every = 5;
+  std::vector<CostGradient> results[2];
+  for (int device = 0; device < 2; ++device) {
+    Simulation sim(scene, grid, 2, true);
+    if (device == 1) sim.use_gpu();
+    PhysicalParameters p = sim.parameters(1);
+    p.youngs_modulus *= 1.4;
+    p.linear_velocity = Eigen::Vector3d(0.4, -1.5, 0.1);
+    sim.set_parameters(1, p);
+    results[device] = evaluate_trajectory_gradient(sim, {4, 8, 12}, cost, options);
+  }
+  for (int b = 0; b < 2; ++b) {
+    const ParameterGradient &c = results[0][b].gradient, &g = results[1][b].gradient;
+    std::vector<std::pair<std::string, std::pair<double, double>>> pairs = {
+        {"youngs_modulus", {c.youngs_modulus, g.youngs_modulus}},
+        {"poisson_ratio", {c.poisson_ratio, g.poisson_ratio}},
+        {"density", {c.density, g.density}},
+        {"mass_damping", {c.mass_damping, g.mass_damping}},
+        {"stiffness_damping", {c.stiffness_damping, g.stiffness_damping}}};
+    for (int k = 0; k < 3; ++k) {
+      pairs.push_back({fmt::format("gravity[{}]", k), {c.gravity[k], g.gravity[k]}});
+      pairs.push_back({fmt::format("linear_velocity[{}]", k), {c.linear_velocity[k], g.linear_velocity[k]}});
+      pairs.push_back({fmt::format("angular_velocity[{}]", k), {c.angular_velocity[k], g.angular_velocity[k]}});
+    }
+    ASSERT_EQ(c.plane_height.size(), g.plane_height.size());
+    for (size_t k = 0; k < c.plane_height.size(); ++k) {
+      pairs.push_back({"plane_height", {c.plane_height[k], g.plane_height[k]}});
+      for (int j = 0; j < 3; ++j) pairs.push_back({fmt::format("plane_normal[{}]", j), {c.plane_normal[k][j], g.plane_normal[k][j]}});
+    }
+    double worst = 0;
+    std::string which;
+    for (const auto& [name, v] : pairs) {
+      const double rel = std::abs(v.first - v.second) / std::max(std::abs(v.first), 1e-12);
+      if (rel >= worst) worst = rel, which = name;
+    }
+    std::printf("[ double ] trajectory gradient, item %d: cost CPU %.12g GPU %.12g; worst parameter relative "
+                "difference %.3g (%s)\n", b,
+                results[0][b].cost, results[1][b].cost, worst, which.c_str());
+    EXPECT_LT(worst, 1e-8) << which;
+  }
+}
+
+}  // namespace
+}  // namespace ssc
