@@ -13,8 +13,10 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 mode=reduced
 [ "${1:-}" = "--full" ] && mode=full
-"$root/tools/setup-build" --target ssc >/dev/null
-ssc=${SSC:-build/bin/ssc}  # SSC=path: a copied binary, so that rebuilding does not change a long run
+# SSC=path: a built (or copied) binary, so that rebuilding does not change a long run
+[ -n "${SSC:-}" ] || "$root/tools/setup-build" --target ssc >/dev/null
+ssc=${SSC:-build/bin/ssc}
+device=${DEVICE:-auto}  # DEVICE=cpu|cuda|auto: where the reconstructions run
 out=out/paper
 mkdir -p "$out"
 if [ "$mode" = full ]; then starts=20; iterations=40; else starts=4; iterations=20; fi
@@ -48,7 +50,7 @@ run() {  # name, cameras, resolution, noise, phi_max, [reconstruct options...]
   echo "== $name: $ncam camera(s), ${res}x${res}, noise $noise m, phi_max $phi m, $starts starts x $iterations iterations"
   $ssc observe examples/torus.json --out "$out/$name-obs" "${sets[@]}" >/dev/null
   $ssc reconstruct examples/torus.json --observations "$out/$name-obs" --fit youngs_modulus \
-    --starts "$starts" --iterations "$iterations" --seed 7 --out "$out/$name-fit" "${sets[@]}" "${extra[@]}" | tail -2
+    --starts "$starts" --iterations "$iterations" --seed 7 --device "$device" --out "$out/$name-fit" "${sets[@]}" "${extra[@]}" | tail -2
   grep -v "^$name " "$out/runs.txt" >"$out/runs.tmp" 2>/dev/null || true
   echo "$name $ncam $res $noise $phi $starts $iterations ${extra[*]}" >>"$out/runs.tmp"
   mv "$out/runs.tmp" "$out/runs.txt"

@@ -58,6 +58,8 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
 
   auto take_frame_costs = [&](int t) {
     auto range = frames_at.equal_range(t);
+    // Batch items in parallel (the cost is const; each item writes its own seeds and results).
+#pragma omp parallel for schedule(dynamic) if (B > 1)
     for (int b = 0; b < B; ++b)
       for (auto it = range.first; it != range.second; ++it) {
         FrameSeed* seed = nullptr;
