@@ -1,15 +1,19 @@
 #!/usr/bin/env bash
-# Reproduces the paper's torus experiments with ssc and writes docs/paper-comparison.md.
-#   tools/paper-experiments.sh            the reduced set (one configuration per sweep, 4 starts; CPU-sized)
-#   tools/paper-experiments.sh --full     every row, 20 starts x 40 iterations (hours on a CPU)
+# Reproduces the paper's experiments with ssc and writes docs/paper-comparison.md.
+#   tools/paper-experiments.sh            the reduced set (the base torus row, 4 starts; CPU-sized)
+#   tools/paper-experiments.sh --full     every row: the torus rows (20 starts x 40 iterations unless
+#                                         STARTS/ITERATIONS say otherwise), the six ball settings, the
+#                                         ball optimiser rows, the multi-parameter ball, the dragon
+#                                         (minutes on a GPU, hours on a CPU)
 #   ONLY="res20 cams4" tools/paper-experiments.sh --full   just those rows (added to earlier runs)
 #   STARTS=N ITERATIONS=K override the counts.
-# Each configuration renders its observations (out/paper/<name>-obs), reconstructs Young's
-# modulus from perturbed starts (out/paper/<name>-fit) and is summarised by
-# tools/paper_comparison.py: how many starts converged (within 10 % of 5000 Pa) and the mean
-# relative error of those.
+# Each configuration renders its observations (out/paper/<name>-obs), reconstructs from
+# perturbed starts (out/paper/<name>-fit) and is summarised by tools/paper_comparison.py: how
+# many starts converged and the mean relative error of those.
 set -euo pipefail
-root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+# SSC_ROOT=dir: the checkout to run in (for a copy of this script run from elsewhere, so that
+# editing the script does not disturb a long run: bash reads scripts as it goes)
+root="${SSC_ROOT:-$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)}"
 cd "$root"
 mode=reduced
 [ "${1:-}" = "--full" ] && mode=full
@@ -56,7 +60,36 @@ run() {  # name, cameras, resolution, noise, phi_max, [reconstruct options...]
   mv "$out/runs.tmp" "$out/runs.txt"
 }
 
-[ -n "$only" ] || rm -f "$out/runs.txt"
+# Rows on other scenes: name, scene, fitted parameters, starts, iterations, a description
+# (no spaces), then --set arguments; recorded in scenes.txt.
+run_scene() {
+  local name=$1 scene=$2 fit=$3 n=$4 k=$5 desc=$6
+  shift 6
+  if [ -n "$only" ] && [[ " $only " != *" $name "* ]]; then return; fi
+  echo "== $name: $scene, fitting $fit, $n starts x $k iterations ($desc)"
+  $ssc observe "$scene" --out "$out/$name-obs" "$@" >/dev/null
+  $ssc reconstruct "$scene" --observations "$out/$name-obs" --fit "$fit" --starts "$n" --iterations "$k" --seed 7 \
+    --device "$device" --out "$out/$name-fit" "$@" | tail -2
+  grep -v "^$name " "$out/scenes.txt" >"$out/scenes.tmp" 2>/dev/null || true
+  echo "$name $scene $fit $n $k $desc" >>"$out/scenes.tmp"
+  mv "$out/scenes.tmp" "$out/scenes.txt"
+}
+
+# The paper's six ball settings: ground tilt (polar 0-25 degrees, any azimuth), ground height
+# and initial velocity drawn once with a fixed seed.
+ball_settings() {
+  python3 - <<'PY'
+import random
+rng = random.Random(2020)
+for k in range(6):
+    polar, azimuth = rng.uniform(0, 25), rng.uniform(0, 360)
+    height = rng.uniform(-0.03, 0.01)
+    v = [rng.uniform(-1, 1), rng.uniform(-2, -0.5), rng.uniform(-1, 1)]
+    print(f"{polar:.1f} {azimuth:.0f} {height:.3f} {v[0]:.2f} {v[1]:.2f} {v[2]:.2f}")
+PY
+}
+
+[ -n "$only" ] || rm -f "$out/runs.txt" "$out/scenes.txt"
 run base 1 50 0.01 0.4
 if [ "$mode" = full ]; then
   for n in 2 4 8; do run "cams$n" "$n" 50 0.01 0.4; done
@@ -65,6 +98,23 @@ if [ "$mode" = full ]; then
   for p in 0.2 0.8; do run "phimax$p" 1 50 0.01 "$p"; done
   for opt in gd lbfgs rprop-paper; do run "opt-$opt" 1 50 0.01 0.4 --optimizer "$opt"; done
   run fd-rprop 1 50 0.01 0.4 --gradient fd
+  k=0
+  while read -r polar azimuth height vx vy vz; do
+    ground="{\"angles_deg\":[$polar,$azimuth],\"height\":$height,\"stiffness\":1e6,\"softmin_alpha\":200}"
+    sets=(--set "ground=$ground" --set "initial.linear_velocity=[$vx,$vy,$vz]")
+    [ $k -eq 0 ] && ball0_sets=("${sets[@]}")
+    run_scene "ball$k" examples/paper-ball.json youngs_modulus 20 30 \
+      "ground_polar=${polar},azimuth=${azimuth},height=${height};v0=($vx,$vy,$vz)" "${sets[@]}"
+    k=$((k + 1))
+  done < <(ball_settings)
+  for opt in gd lbfgs; do
+    run_scene "ball0-$opt" examples/paper-ball.json youngs_modulus 20 30 "setting_of_ball0;optimizer_$opt" \
+      "${ball0_sets[@]}" --optimizer "$opt"
+  done
+  run_scene ball-multi examples/paper-ball.json gravity.y,youngs_modulus,stiffness_damping 60 20 "flat_ground;v0=(0.5,-1.5,0)"
+  dragon_obs='{"every":1,"noise":0.002,"seed":42,"depth_scale":0.0001,"phi_max":0.03,"cameras":[{"name":"side","width":50,"height":50,"fov_deg":50,"eye":[0.9,0.45,0.2],"target":[0,0.2,0],"min_depth":0.1,"max_depth":3}]}'
+  run_scene dragon examples/dragon.json youngs_modulus 20 30 "fixed_base;10_steps;1_camera_50x50" \
+    --set "observation=$dragon_obs" --set time.steps=10
 fi
 python3 tools/paper_comparison.py "$out" "$mode" "$starts" "$iterations" >docs/paper-comparison.md
 echo "wrote docs/paper-comparison.md"
