@@ -426,14 +426,27 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
     close_segment();
     s = solver_state();
   }
-  for (int it = 0; !whole_loop; it += check_every) {
+  // The first host check comes after as many iterations as this solve needed last time
+  // (rounded up to check_every): consecutive steps need similar counts, and an iteration
+  // launched for a solve that has already stopped returns at once, far cheaper than a
+  // host check. Its own graph segment per length.
+  int first = check_every;
+  if (const auto last = last_iterations.find(tag); last != last_iterations.end())
+    first = std::max(check_every, (last->second + check_every - 1) / check_every * check_every);
+  if (!whole_loop) {
+    close_segment();
+    open_segment(fmt::format("{}/first {}", tag, first));
+  }
+  for (int it = 0; !whole_loop;) {
     if (it > 0) open_segment(tag + "/chunk");
+    const int chunk = it == 0 ? first : check_every;
     if (recording())
-      for (int k = 0; k < check_every; ++k) {
+      for (int k = 0; k < chunk; ++k) {
         apply(p, q, 1);
         launch(iterate, c);
       }
     close_segment();
+    it += chunk;
     s = solver_state();
     bool any = false;
     for (int k = 0; k < batch; ++k) any |= s[16 * k + 6] != 0.0;
@@ -441,6 +454,9 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
   }
   open_segment(fmt::format("{} {}", segment_prefix, ++segment_count));
   std::vector<int> iterations(batch);
+  int most = 0;
+  for (int k = 0; k < batch; ++k) most = std::max(most, int(s[16 * k + 7]));
+  last_iterations[tag] = most;
   for (int k = 0; k < batch; ++k) {
     iterations[k] = int(s[16 * k + 7]);
     if (s[16 * k + 9] == 0.0)

@@ -82,6 +82,7 @@ struct GpuTimestep::Impl {
   bool replaying = false;  // the open segment has a graph: launches are not recorded
   std::vector<Pending> pending;
   int segment_count = 0;
+  std::map<std::string, int> last_iterations;  // per solve tag: the most iterations of an item, last time
   std::string segment_prefix = "segment";
 
   Impl(const Graph& g, const SimGrid& gr, int b, const SolverOptions& s, const GpuOptions& o)

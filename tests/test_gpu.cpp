@@ -1,7 +1,7 @@
 // The generated kernels on a GPU against the CPU interpreter (every test here skips
 // without a usable GPU; tools/device-check.sh runs them on the device machine):
 //  - GpuForward: one forward step, double and float, every tensor compared; determinism;
-//    per-kernel profile of the torus step;
+//  - GpuProfile: per-kernel profile and step times of the torus and the teddy-sized body;
 //  - GpuAdjoint: one adjoint step from random cotangents (every input and state
 //    cotangent compared), determinism, and a whole trajectory's gradient per parameter
 //    with the backward pass on the GPU against the interpreter's.
@@ -106,32 +106,52 @@ TEST(GpuForward, ReportsMissingGpuCleanly) {
   }
 }
 
-TEST(GpuForward, ProfileTorusStep) {
+// Per-kernel launches and times (synchronised after every launch) of a forward and an
+// adjoint step, and the unprofiled step times, for the torus and the teddy-sized body.
+TEST(GpuProfile, TorusAndTeddySteps) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
-  const Scene scene = torus_scene();
-  const SimGrid grid = build_body_grid(scene);
-  Simulation sim(scene, grid, 1, true);
-  for (int s = 0; s < 2; ++s) sim.step();
-  for (const char* real : {"double", "float"}) {
-    GpuOptions go;
-    go.real = real;
-    go.profile = true;
-    GpuTimestep gpu(sim.interpreter().graph(), grid, 1, sim.interpreter().options(), go);
-    gpu.upload(sim.interpreter().store());
-    gpu.run();
-    go.profile = false;
-    GpuTimestep fast(sim.interpreter().graph(), grid, 1, sim.interpreter().options(), go);
-    fast.upload(sim.interpreter().store());
-    fast.run();
-    const auto start = std::chrono::steady_clock::now();
-    for (int k = 0; k < 5; ++k) fast.run();
-    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / 5;
-    std::printf("[ %s ] torus forward step on %s: %.3f ms (unprofiled, %d CG iterations)\n", real,
-                gpu_description().c_str(), ms, fast.cg_iterations()[0]);
-    for (const GpuKernelTiming& t : gpu.timings())
-      std::printf("  %-7s %-52s %5d launches %8.4f ms/launch %4d regs\n", real, t.name.c_str(), t.launches,
-                  t.ms / t.launches, t.registers);
+  for (const char* body : {"torus", "teddy-sized"}) {
+    const Scene scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/" + body + ".json");
+    const SimGrid grid = build_body_grid(scene);
+    Simulation sim(scene, grid, 1, true);
+    for (int s = 0; s < 5; ++s) sim.step();
+    const TimestepGraph& tg = sim.timestep_graph();
+    TensorStore<double>& store = sim.interpreter().store();
+    for (const char* real : {"double", "float"}) {
+      auto step = [&](GpuTimestep& gpu, bool adjoint) {
+        if (!adjoint) return gpu.run();
+        gpu.clear_adjoints(true);
+        for (int t : {tg.u, tg.v, tg.band_u}) gpu.set_adjoint(t, store.all(t));
+        gpu.run_adjoint();
+      };
+      GpuOptions go;
+      go.real = real;
+      GpuTimestep fast(tg.graph, grid, 1, sim.interpreter().options(), go);
+      fast.upload(store);
+      fast.run();
+      for (int t : {tg.u, tg.v, tg.band_u}) fast.download(store, t);  // seeds: the step's own fields
+      fast.upload(store);
+      double ms[2];
+      for (int adjoint = 0; adjoint < 2; ++adjoint) {
+        step(fast, adjoint);
+        const auto start = std::chrono::steady_clock::now();
+        for (int k = 0; k < 10; ++k) step(fast, adjoint);
+        ms[adjoint] = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() / 10;
+      }
+      std::printf("[ %s ] %s step on %s: forward %.3f ms (%d CG iterations), adjoint %.3f ms (%d CG iterations), "
+                  "%d cells, %d nodes, %d band nodes\n",
+                  real, body, gpu_description().c_str(), ms[0], fast.cg_iterations()[0], ms[1],
+                  fast.adjoint_cg_iterations()[0], grid.cell_count, grid.node_count, grid.band_count);
+      go.profile = true;
+      GpuTimestep gpu(tg.graph, grid, 1, sim.interpreter().options(), go);
+      gpu.upload(store);
+      step(gpu, false);
+      step(gpu, true);
+      for (const GpuKernelTiming& t : gpu.timings())
+        std::printf("  %-7s %-12s %-52s %5d launches %8.4f ms/launch %4d regs\n", real, body, t.name.c_str(),
+                    t.launches, t.ms / t.launches, t.registers);
+    }
   }
 }
 

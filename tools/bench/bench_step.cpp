@@ -23,24 +23,15 @@ struct Body {
   SimGrid grid;
 };
 
-const char* kTeddyScene = R"({
-  "object": {"primitive": "sphere", "radius": 0.3, "position": [0, 0.4, 0]},
-  "grid": {"cell_size": 0.0445, "band_width": 0},
-  "material": {"youngs_modulus": 5000, "poisson_ratio": 0.45, "density": 100},
-  "ground": {"height": 0, "normal": [0, 1, 0], "stiffness": 1e5, "softmin_alpha": 50},
-  "time": {"dt": 0.01, "steps": 40}
-})";
-
 Body& body(const std::string& name) {
   static std::map<std::string, std::unique_ptr<Body>> cache;
   auto& b = cache[name];
   if (!b) {
     b = std::make_unique<Body>();
     if (name == "teddy")
-      b->scene = parse_scene(nlohmann::json::parse(kTeddyScene), "teddy-sized sphere");
+      b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/teddy-sized.json");
     else
-      b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/" + name + ".json",
-                            {"grid.band_width=0"});
+      b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/" + name + ".json", {"grid.band_width=0"});
     b->grid = build_body_grid(b->scene);
   }
   return *b;
@@ -135,11 +126,13 @@ void BM_GpuAdjointStep(benchmark::State& state, const std::string& name, const s
   gpu.upload(store);
   gpu.run();
   for (int t : {tg.u, tg.v, tg.band_u}) gpu.download(store, t);
-  for (auto _ : state) {
+  auto adjoint_step = [&] {
     gpu.clear_adjoints(true);
     for (int t : {tg.u, tg.v, tg.band_u}) gpu.set_adjoint(t, store.all(t));
     gpu.run_adjoint();
-  }
+  };
+  adjoint_step();  // compiles and loads the adjoint kernels, captures the graphs
+  for (auto _ : state) adjoint_step();
   report_size(state, b);
   state.counters["cg_iter"] = gpu.adjoint_cg_iterations()[0];
   state.counters["batch"] = batch;
@@ -167,6 +160,7 @@ void BM_GpuGradientStep(benchmark::State& state, const std::string& name, const 
     for (size_t i = 0; i < pos.size(); i += 2) frame.points.push_back(pos[i]);
   }
   const SurfaceConstraintCost cost(b.grid, 2 * b.grid.h);
+  evaluate_cost_gradient(sim, cost, {frame});  // compiles and loads the kernels, captures the graphs
   for (auto _ : state) benchmark::DoNotOptimize(evaluate_cost_gradient(sim, cost, {frame}));
   state.counters["step_ms"] = benchmark::Counter(10e-3, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   report_size(state, b);
