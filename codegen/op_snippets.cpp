@@ -543,14 +543,13 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
     return b.code(fmt::format("add3($d_{}, i, ops::gather_corner_sum($corner, g_node_cell_offset, g_node_cell_entry, i));\n", slot));
   };
   auto lame_reduce = [&](const char* label) {
-    Builder b(g, op, label, Extent::One);
+    Builder b(g, op, label, Extent::Item);
     b.a("lambda").a("mu").scratch("red", "red_" + n, "Real", Domain::Cell, 2, false).barrier();
     return b.code(
-        "double l = 0, m = 0;\n"
-        "for (int e = 0; e < n_cell; ++e) l += double($red[2 * e]);\n"
-        "for (int e = 0; e < n_cell; ++e) m += double($red[2 * e + 1]);\n"
-        "$d_lambda[0] += Real(l);\n"
-        "$d_mu[0] += Real(m);\n");
+        "double lm[2] = {0, 0};\n"
+        "for (int e = i; e < n_cell; e += SSC_ITEM) { lm[0] += double($red[2 * e]); lm[1] += double($red[2 * e + 1]); }\n"
+        "gen::block_sum<2>(lm);\n"
+        "if (i == 0) { $d_lambda[0] += Real(lm[0]); $d_mu[0] += Real(lm[1]); }\n");
   };
   switch (o.kind) {
     case OpKind::Lame:
@@ -564,11 +563,12 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
       s.push_back(Builder(g, op, "node_mass", Extent::Node)
                       .a("mass", false).grid("node_volume", "Real").scratch("red", "red_" + n, "double", Domain::Node, 1, true)
                       .code("$red[i] = double($d_mass[i]) * double(g_node_volume[i]);\n"));
-      s.push_back(Builder(g, op, "node_mass_reduce", Extent::One)
+      s.push_back(Builder(g, op, "node_mass_reduce", Extent::Item)
                       .a("density").scratch("red", "red_" + n, "double", Domain::Node, 1, false).barrier()
-                      .code("double sum = 0;\n"
-                            "for (int k = 0; k < n_node; ++k) sum += $red[k];\n"
-                            "$d_density[0] += Real(sum);\n"));
+                      .code("double sum[1] = {0};\n"
+                            "for (int k = i; k < n_node; k += SSC_ITEM) sum[0] += $red[k];\n"
+                            "gen::block_sum<1>(sum);\n"
+                            "if (i == 0) $d_density[0] += Real(sum[0]);\n"));
       break;
     case OpKind::Corotation:
       s.push_back(Builder(g, op, "corotation", Extent::Cell)
@@ -632,14 +632,16 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
                       .scratch("vbar", "vbar_" + n, "Real", Domain::Point, 3, false, true)
                       .code("add3($d_u_prev, i, ops::gather_point_sum($xbar, g_point_t, g_node_point_offset, g_node_point_entry, i));\n"
                             "add3($d_v_prev, i, ops::gather_point_sum($vbar, g_point_t, g_node_point_offset, g_node_point_entry, i));\n"));
-      s.push_back(Builder(g, op, "contact_force_reduce", Extent::One)
+      s.push_back(Builder(g, op, "contact_force_reduce", Extent::Item)
                       .a("ground_planes").scratch("pbar", "planebar_" + n, "Real", Domain::Point, kMaxPlaneBars, false).barrier()
-                      .code("for (int k = 0; k < n_plane; ++k)\n"
-                            "  for (int j = 0; j < 4; ++j) {\n"
-                            "    double sum = 0;\n"
-                            "    for (int p = 0; p < n_point; ++p) sum += double($pbar[32 * p + 4 * k + j]);\n"
-                            "    $d_ground_planes[6 * k + j] += Real(sum);\n"
-                            "  }\n"));
+                      .code("for (int k = 0; k < n_plane; ++k) {\n"
+                            "  double sum[4] = {0, 0, 0, 0};\n"
+                            "  for (int p = i; p < n_point; p += SSC_ITEM)\n"
+                            "    for (int j = 0; j < 4; ++j) sum[j] += double($pbar[32 * p + 4 * k + j]);\n"
+                            "  gen::block_sum<4>(sum);\n"
+                            "  if (i == 0)\n"
+                            "    for (int j = 0; j < 4; ++j) $d_ground_planes[6 * k + j] += Real(sum[j]);\n"
+                            "}\n"));
       break;
     case OpKind::NodeForce: {
       s.push_back(Builder(g, op, "node_force_corners", Extent::Cell)
@@ -657,12 +659,14 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
                       .code("const Vec3<Real> fb = load3($d_force, i);\n"
                             "$d_mass[i] += dot(fb, load3($gravity, 0));\n"
                             "for (int k = 0; k < 3; ++k) $red[3 * i + k] = double($mass[i]) * double(fb[k]);\n"));
-      s.push_back(Builder(g, op, "node_force_reduce", Extent::One)
+      s.push_back(Builder(g, op, "node_force_reduce", Extent::Item)
                       .a("gravity").scratch("red", "red_" + n, "double", Domain::Node, 3, false).barrier()
                       .code("double gb[3] = {0, 0, 0};\n"
-                            "for (int k = 0; k < n_node; ++k)\n"
+                            "for (int k = i; k < n_node; k += SSC_ITEM)\n"
                             "  for (int j = 0; j < 3; ++j) gb[j] += $red[3 * k + j];\n"
-                            "for (int j = 0; j < 3; ++j) $d_gravity[j] += Real(gb[j]);\n"));
+                            "gen::block_sum<3>(gb);\n"
+                            "if (i == 0)\n"
+                            "  for (int j = 0; j < 3; ++j) $d_gravity[j] += Real(gb[j]);\n"));
       break;
     }
     case OpKind::StiffnessApply:
@@ -703,12 +707,12 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
                             "add3($d_force, i, c.dt * rb);\n"
                             "$red[2 * i] = double($mass[i]) * double(dot(rb, ui));\n"
                             "$red[2 * i + 1] = double(dot(rb, kui));\n"));
-      s.push_back(Builder(g, op, "newmark_rhs_reduce", Extent::One)
+      s.push_back(Builder(g, op, "newmark_rhs_reduce", Extent::Item)
                       .a("mass_damping").a("stiffness_damping").scratch("red", "red_" + n, "double", Domain::Node, 2, false).barrier()
-                      .code("double a = 0, b2 = 0;\n"
-                            "for (int k = 0; k < n_node; ++k) { a += $red[2 * k]; b2 += $red[2 * k + 1]; }\n"
-                            "$d_mass_damping[0] += Real(a);\n"
-                            "$d_stiffness_damping[0] += Real(b2);\n"));
+                      .code("double ab[2] = {0, 0};\n"
+                            "for (int k = i; k < n_node; k += SSC_ITEM) { ab[0] += $red[2 * k]; ab[1] += $red[2 * k + 1]; }\n"
+                            "gen::block_sum<2>(ab);\n"
+                            "if (i == 0) { $d_mass_damping[0] += Real(ab[0]); $d_stiffness_damping[0] += Real(ab[1]); }\n"));
       break;
     }
     case OpKind::NewmarkSolve: {
@@ -746,18 +750,20 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
                             "  $red2[2 * i] = -(double($mass[i]) * double(dot(wi, ui)));\n"
                             "  $red2[2 * i + 1] = -double(dot(wi, kui));\n"
                             "}\n"));
-      s.push_back(Builder(g, op, "newmark_solve_reduce", Extent::One)
+      s.push_back(Builder(g, op, "newmark_solve_reduce", Extent::Item)
                       .a("lambda").a("mu").a("mass_damping").a("stiffness_damping")
                       .scratch("red", "red_" + n, "Real", Domain::Cell, 2, false)
                       .scratch("red2", "red2_" + n, "double", Domain::Node, 2, false).barrier()
-                      .code("double l = 0, m = 0, a = 0, b2 = 0;\n"
-                            "for (int e = 0; e < n_cell; ++e) l += double($red[2 * e]);\n"
-                            "for (int e = 0; e < n_cell; ++e) m += double($red[2 * e + 1]);\n"
-                            "for (int k = 0; k < n_node; ++k) { a += $red2[2 * k]; b2 += $red2[2 * k + 1]; }\n"
-                            "$d_lambda[0] += Real(l);\n"
-                            "$d_mu[0] += Real(m);\n"
-                            "$d_mass_damping[0] += Real(a);\n"
-                            "$d_stiffness_damping[0] += Real(b2);\n"));
+                      .code("double v[4] = {0, 0, 0, 0};\n"
+                            "for (int e = i; e < n_cell; e += SSC_ITEM) { v[0] += double($red[2 * e]); v[1] += double($red[2 * e + 1]); }\n"
+                            "for (int k = i; k < n_node; k += SSC_ITEM) { v[2] += $red2[2 * k]; v[3] += $red2[2 * k + 1]; }\n"
+                            "gen::block_sum<4>(v);\n"
+                            "if (i == 0) {\n"
+                            "  $d_lambda[0] += Real(v[0]);\n"
+                            "  $d_mu[0] += Real(v[1]);\n"
+                            "  $d_mass_damping[0] += Real(v[2]);\n"
+                            "  $d_stiffness_damping[0] += Real(v[3]);\n"
+                            "}\n"));
       break;
     }
     case OpKind::VelocityUpdate:
