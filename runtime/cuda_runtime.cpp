@@ -429,10 +429,12 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
   // The first host check comes after as many iterations as this solve needed last time
   // (rounded up to check_every): consecutive steps need similar counts, and an iteration
   // launched for a solve that has already stopped returns at once, far cheaper than a
-  // host check. Its own graph segment per length.
+  // host check. Its own graph segment per length, so the length is capped (16 lengths at
+  // most per solve: a solve that needs thousands of iterations must not capture a graph of
+  // thousands of launches for every count it meets).
   int first = check_every;
   if (const auto last = last_iterations.find(tag); last != last_iterations.end())
-    first = std::max(check_every, (last->second + check_every - 1) / check_every * check_every);
+    first = std::clamp((last->second + check_every - 1) / check_every * check_every, check_every, 16 * check_every);
   if (!whole_loop) {
     close_segment();
     open_segment(fmt::format("{}/first {}", tag, first));

@@ -373,5 +373,22 @@ TEST(GradientPipeline, RepeatedRunsAreBitwiseIdentical) {
   EXPECT_TRUE(bitwise_equal(a, c)) << "a fresh simulation object";
 }
 
+// A start of a reconstruction can diverge before the simulation's checks stop it: the cost
+// must stay finite and bounded in memory when the deformed cells spread over kilometres
+// (its search grid once asked for 4096^3 bins here).
+TEST(GradientPipeline, CostOfFarSpreadCellsStaysBounded) {
+  const Pipeline& pl = pipeline();
+  const SimGrid& g = pl.grid;
+  std::vector<double> u(3 * size_t(g.node_count), 0.0), band(3 * size_t(g.band_count), 0.0);
+  u[0] = 5e3;
+  u[4] = -7e3;
+  band[5] = 9e3;
+  std::vector<double> ub(u.size(), 0.0), bb(band.size(), 0.0);
+  FrameCost c;
+  ASSERT_NO_THROW(c = pl.cost->evaluate(pl.frames.back().points, 1.0, u.data(), band.data(), ub.data(), bb.data()));
+  EXPECT_TRUE(std::isfinite(c.cost));
+  EXPECT_GT(c.matched, 0);  // the cells left in place still match points
+}
+
 }  // namespace
 }  // namespace ssc

@@ -67,7 +67,11 @@ run_scene() {
   shift 6
   if [ -n "$only" ] && [[ " $only " != *" $name "* ]]; then return; fi
   echo "== $name: $scene, fitting $fit, $n starts x $k iterations ($desc)"
-  $ssc observe "$scene" --out "$out/$name-obs" "$@" >/dev/null
+  local sets=() args=("$@") i
+  for ((i = 0; i < ${#args[@]}; i++)); do  # the scene overrides also shape the observations
+    if [ "${args[i]}" = --set ]; then sets+=(--set "${args[i + 1]}"); i=$((i + 1)); fi
+  done
+  $ssc observe "$scene" --out "$out/$name-obs" "${sets[@]}" >/dev/null
   $ssc reconstruct "$scene" --observations "$out/$name-obs" --fit "$fit" --starts "$n" --iterations "$k" --seed 7 \
     --device "$device" --out "$out/$name-fit" "$@" | tail -2
   grep -v "^$name " "$out/scenes.txt" >"$out/scenes.tmp" 2>/dev/null || true

@@ -48,9 +48,25 @@ BinGrid build_bins(const std::vector<std::array<Vec3<double>, 8>>& X, double siz
     for (const Vec3<double>& x : X[c]) boxes[c].extend(Eigen::Vector3d(x.x, x.y, x.z));
     all.extend(boxes[c]);
   }
-  bins.size = size;
   bins.lo = all.min();
-  for (int d = 0; d < 3; ++d) bins.n[d] = std::max(1, std::min(4096, int(std::ceil(all.sizes()[d] / size)) + 1));
+  if (X.empty() || !all.sizes().allFinite()) {  // nothing to match against
+    bins.size = size;
+    bins.n = Eigen::Vector3i::Ones();
+    bins.offset.assign(2, 0);
+    return bins;
+  }
+  // Bins of one cell size, coarser when the deformed cells spread far (a diverging start of a
+  // reconstruction): at most 8 bins per cell in all.
+  const double cap = 8.0 * double(X.size()) + 64.0;
+  auto bins_for = [&](double s) {
+    double t = 1;
+    for (int d = 0; d < 3; ++d) t *= std::floor(all.sizes()[d] / s) + 1;
+    return t;
+  };
+  bins.size = size;
+  while (bins_for(bins.size) > cap) bins.size *= 1.25;
+  for (int d = 0; d < 3; ++d) bins.n[d] = int(std::floor(all.sizes()[d] / bins.size)) + 1;
+  size = bins.size;
   const long total = long(bins.n.x()) * bins.n.y() * bins.n.z();
   std::vector<int> count(total + 1, 0);
   auto range = [&](const Eigen::AlignedBox3d& b, Eigen::Vector3i& lo, Eigen::Vector3i& hi) {
