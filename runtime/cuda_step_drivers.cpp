@@ -11,6 +11,7 @@
 #include <fmt/format.h>
 
 #include <cstdlib>
+#include <functional>
 
 #include "models/io/errors.h"
 #include "runtime/cuda_timestep_impl.h"
@@ -55,15 +56,21 @@ const PlannedKernel* GpuTimestep::Impl::extension_loop() const {
   return fused_extension_enabled(options.fused_extension) ? plan.find(false, "extension_pcg_loop") : nullptr;
 }
 
+// Jacobi diagonal and the masked right-hand side of the time-step system into v_inv_diag and
+// v_b; x is zeroed on fixed nodes (everywhere with zero_x).
+void GpuTimestep::Impl::newmark_setup(cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x) {
+  launch(kernel("newmark_diag"));
+  Call setup;
+  setup.vectors = {{"v_rhs", rhs}, {"v_x", x}, {"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
+  setup.values = {{"zero_x", zero_x ? 1 : 0}};
+  launch(kernel("newmark_setup"), setup);
+}
+
 void GpuTimestep::Impl::newmark(int o) {
   const OpNode& op = graph.ops()[o];
   const cu::DevicePtr u = tensors.at(op.output("u")).ptr, rhs = tensors.at(op.input("rhs")).ptr;
   launch(kernel("newmark_init"));
-  launch(kernel("newmark_diag"));
-  Call setup;
-  setup.vectors = {{"v_rhs", rhs}, {"v_x", u}, {"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
-  setup.values = {{"zero_x", 0}};
-  launch(kernel("newmark_setup"), setup);
+  newmark_setup(rhs, u, false);
   cg_iterations = pcg(u, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(),
                       "time-step solve", fmt::format("newmark {}", o));
   write_iterations(op.output("cg_iterations"), cg_iterations);
@@ -79,40 +86,40 @@ void GpuTimestep::Impl::extension(int o) {
       "displacement extension", fmt::format("extension {}", o), extension_loop());
 }
 
-void GpuTimestep::Impl::run() {
+void GpuTimestep::Impl::launch_plan(const std::vector<PlannedKernel>& kernels, const std::string& first_segment,
+                                    const std::function<void(int)>& solve, const char* what) {
   cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
   segment_count = 0;
-  segment_prefix = "segment";
-  open_segment("segment 0");
+  open_segment(first_segment);
   int solved = -1;
-  for (const PlannedKernel& k : plan.forward) {
+  for (const PlannedKernel& k : kernels) {
     if (k.stage.empty()) {
       launch(k);
       continue;
     }
     const int o = k.parts.front().op;
-    if (o == solved) continue;
+    if (o == solved) continue;  // the op's other solver stages: solve() launched them
     solved = o;
+    solve(o);
+  }
+  close_segment();
+  cu::check(d->CtxSynchronize(), what);
+}
+
+void GpuTimestep::Impl::run() {
+  segment_prefix = "segment";
+  launch_plan(plan.forward, "segment 0", [this](int o) {
     if (graph.ops()[o].kind == OpKind::NewmarkSolve)
       newmark(o);
     else
       extension(o);
-  }
-  close_segment();
-  cu::check(d->CtxSynchronize(), "forward step");
+  }, "forward step");
 }
 
 void GpuTimestep::Impl::adjoint_newmark(int o) {
   const OpNode& op = graph.ops()[o];
   const cu::DevicePtr w = scratch.at(scratch_of("w", o)).ptr;
-  launch(kernel("newmark_diag"));
-  Call setup;
-  setup.vectors = {{"v_rhs", adjoints.at(op.output("u")).ptr},
-                   {"v_x", w},
-                   {"v_b", scratch.at("v_b").ptr},
-                   {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
-  setup.values = {{"zero_x", 1}};
-  launch(kernel("newmark_setup"), setup);
+  newmark_setup(adjoints.at(op.output("u")).ptr, w, true);
   adjoint_cg_iterations = pcg(w, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(),
                               "adjoint time-step solve", fmt::format("adjoint newmark {}", o));
 }
@@ -128,28 +135,15 @@ void GpuTimestep::Impl::adjoint_extension(int o) {
 }
 
 void GpuTimestep::Impl::run_adjoint() {
-  cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
-  segment_count = 0;
   // The first segment holds the extension setup, whose zero_x argument differs between
   // the first step of a backward pass and the others: one captured graph each.
   segment_prefix = "adjoint segment";
-  open_segment(fresh_backward ? "adjoint segment 0 (fresh)" : "adjoint segment 0");
-  int solved = -1;
-  for (const PlannedKernel& k : plan.adjoint) {
-    if (k.stage.empty()) {
-      launch(k);
-      continue;
-    }
-    const int o = k.parts.front().op;
-    if (o == solved) continue;
-    solved = o;
+  launch_plan(plan.adjoint, fresh_backward ? "adjoint segment 0 (fresh)" : "adjoint segment 0", [this](int o) {
     if (graph.ops()[o].kind == OpKind::NewmarkSolve)
       adjoint_newmark(o);
     else
       adjoint_extension(o);
-  }
-  close_segment();
-  cu::check(d->CtxSynchronize(), "adjoint step");
+  }, "adjoint step");
   fresh_backward = false;
 }
 

@@ -117,6 +117,9 @@ struct GpuTimestep::Impl {
   Apply newmark_apply();
   Apply extension_apply();
   const PlannedKernel* extension_loop() const;
+  void launch_plan(const std::vector<PlannedKernel>& kernels, const std::string& first_segment,
+                   const std::function<void(int)>& solve, const char* what);
+  void newmark_setup(cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x);
   void newmark(int op);
   void extension(int op);
   void run();

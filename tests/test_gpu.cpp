@@ -23,6 +23,16 @@
 namespace ssc {
 namespace {
 
+// max |x - y| / max |x|
+double relative_difference(const std::vector<double>& x, const std::vector<double>& y) {
+  double diff = 0, norm = 0;
+  for (size_t i = 0; i < x.size(); ++i) {
+    diff = std::max(diff, std::abs(x[i] - y[i]));
+    norm = std::max(norm, std::abs(x[i]));
+  }
+  return norm > 0 ? diff / norm : diff;
+}
+
 void gpu_vs_interpreter(const std::string& real, double tolerance) {
   const Scene scene = torus_scene();
   const SimGrid grid = build_body_grid(scene);
@@ -51,14 +61,7 @@ void gpu_vs_interpreter(const std::string& real, double tolerance) {
   for (size_t t = 0; t < cpu.graph().tensors().size(); ++t) {
     const TensorInfo& info = cpu.graph().tensor(int(t));
     if (info.role != TensorInfo::Role::Intermediate) continue;
-    const std::vector<double>& x = cpu.store().all(int(t));
-    const std::vector<double>& y = got.all(int(t));
-    double diff = 0, norm = 0;
-    for (size_t i = 0; i < x.size(); ++i) {
-      diff = std::max(diff, std::abs(x[i] - y[i]));
-      norm = std::max(norm, std::abs(x[i]));
-    }
-    const double rel = norm > 0 ? diff / norm : diff;
+    const double rel = relative_difference(cpu.store().all(int(t)), got.all(int(t)));
     all += fmt::format(" {}={:.2g}", info.name, rel);
     if ((info.name == "u" || info.name == "v" || info.name == "band_u") && rel >= err) {
       err = rel;
@@ -156,15 +159,6 @@ TEST(GpuProfile, TorusAndTeddySteps) {
 }
 
 // ---- adjoint ----
-
-double relative_difference(const std::vector<double>& x, const std::vector<double>& y) {
-  double diff = 0, norm = 0;
-  for (size_t i = 0; i < x.size(); ++i) {
-    diff = std::max(diff, std::abs(x[i] - y[i]));
-    norm = std::max(norm, std::abs(x[i]));
-  }
-  return norm > 0 ? diff / norm : diff;
-}
 
 void adjoint_vs_interpreter(const std::string& real, double tolerance) {
   const Scene scene = torus_scene();

@@ -59,10 +59,12 @@ void BM_CpuForwardStep(benchmark::State& state, const std::string& name) {
   state.counters["batch"] = double(state.range(0));
 }
 
-// Forward + adjoint of a 10-step J_SSC evaluation, per step.
-void BM_CpuGradientStep(benchmark::State& state, const std::string& name) {
-  Body& b = body(name);
-  Simulation sim(b.scene, b.grid, 1, true);
+// A 10-step J_SSC evaluation with its full adjoint (forward pass, recomputation, adjoint; the
+// cost on the host) against every other surface point of the body's own 10th step, on the
+// CPU interpreter (gpu_real empty) or the GPU. Per step: the `step_ms` counter.
+void gradient_steps(benchmark::State& state, Body& b, int batch, const std::string& gpu_real) {
+  Simulation sim(b.scene, b.grid, batch, true);
+  if (!gpu_real.empty()) sim.use_gpu(gpu_real);
   const DeformedSurface surface(b.grid);
   ObservedFrame frame;
   frame.step = 10;
@@ -73,9 +75,19 @@ void BM_CpuGradientStep(benchmark::State& state, const std::string& name) {
     for (size_t i = 0; i < pos.size(); i += 2) frame.points.push_back(pos[i]);
   }
   const SurfaceConstraintCost cost(b.grid, 2 * b.grid.h);
+  evaluate_cost_gradient(sim, cost, {frame});  // warm-up (on a GPU: kernels loaded, graphs captured)
   for (auto _ : state) benchmark::DoNotOptimize(evaluate_cost_gradient(sim, cost, {frame}));
-  state.SetItemsProcessed(state.iterations() * 10);  // steps
+  state.counters["step_ms"] = benchmark::Counter(10e-3, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
   report_size(state, b);
+  state.counters["batch"] = batch;
+}
+
+void BM_CpuGradientStep(benchmark::State& state, const std::string& name) { gradient_steps(state, body(name), 1, ""); }
+
+bool gpu_or_skip(benchmark::State& state) {
+  const std::string why = gpu_unavailable_reason();
+  if (!why.empty()) state.SkipWithError(why.c_str());
+  return why.empty();
 }
 
 // The body advanced 5 steps (deformed, rotated, in contact) in every batch item.
@@ -88,11 +100,7 @@ std::unique_ptr<Simulation> deformed_batch(Body& b, int batch) {
 }
 
 void BM_GpuForwardStep(benchmark::State& state, const std::string& name, const std::string& real) {
-  const std::string why = gpu_unavailable_reason();
-  if (!why.empty()) {
-    state.SkipWithError(why.c_str());
-    return;
-  }
+  if (!gpu_or_skip(state)) return;
   Body& b = body(name);
   const int batch = int(state.range(0));
   std::unique_ptr<Simulation> sim = deformed_batch(b, batch);
@@ -111,11 +119,7 @@ void BM_GpuForwardStep(benchmark::State& state, const std::string& name, const s
 // One adjoint step on the device (cotangent upload, cold extension start included),
 // after one forward step; the seeds are the step's own u, v and band_u (smooth fields).
 void BM_GpuAdjointStep(benchmark::State& state, const std::string& name, const std::string& real) {
-  const std::string why = gpu_unavailable_reason();
-  if (!why.empty()) {
-    state.SkipWithError(why.c_str());
-    return;
-  }
+  if (!gpu_or_skip(state)) return;
   Body& b = body(name);
   const int batch = int(state.range(0));
   std::unique_ptr<Simulation> sim = deformed_batch(b, batch);
@@ -139,33 +143,8 @@ void BM_GpuAdjointStep(benchmark::State& state, const std::string& name, const s
   state.counters["batch"] = batch;
 }
 
-// evaluate_cost_gradient over 10 steps with the steps and the adjoint on the GPU; the
-// reported time is per step (forward, recomputation and adjoint, J_SSC on the host).
 void BM_GpuGradientStep(benchmark::State& state, const std::string& name, const std::string& real) {
-  const std::string why = gpu_unavailable_reason();
-  if (!why.empty()) {
-    state.SkipWithError(why.c_str());
-    return;
-  }
-  Body& b = body(name);
-  const int batch = int(state.range(0));
-  Simulation sim(b.scene, b.grid, batch, true);
-  sim.use_gpu(real);
-  const DeformedSurface surface(b.grid);
-  ObservedFrame frame;
-  frame.step = 10;
-  {
-    Simulation ref(b.scene, b.grid, 1, false);
-    for (int i = 0; i < 10; ++i) ref.step();
-    const auto pos = surface.positions(ref.displacement(0));
-    for (size_t i = 0; i < pos.size(); i += 2) frame.points.push_back(pos[i]);
-  }
-  const SurfaceConstraintCost cost(b.grid, 2 * b.grid.h);
-  evaluate_cost_gradient(sim, cost, {frame});  // compiles and loads the kernels, captures the graphs
-  for (auto _ : state) benchmark::DoNotOptimize(evaluate_cost_gradient(sim, cost, {frame}));
-  state.counters["step_ms"] = benchmark::Counter(10e-3, benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
-  report_size(state, b);
-  state.counters["batch"] = batch;
+  if (gpu_or_skip(state)) gradient_steps(state, body(name), int(state.range(0)), real);
 }
 
 void register_all() {
