@@ -32,6 +32,7 @@
 #include "models/sim/body.h"
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
+#include "runtime/cuda_runtime.h"
 
 namespace ssc {
 namespace {
@@ -978,6 +979,26 @@ TEST_F(CliSimulate, WritesFramesAndSummary) {
   EXPECT_LT(s["frames"][4]["center_of_mass"][1].get<double>(), 0.12);
   EXPECT_NEAR(s.at("mass").get<double>(), 120 * s["grid"]["volume"].get<double>(), 0.05 * s.at("mass").get<double>());
   EXPECT_TRUE(leftovers().empty());
+}
+
+// --device: cuda without a usable GPU is an input error (exit 2) that names the reason and the
+// fix, before any output exists; auto falls back to the CPU and says so in one line.
+TEST_F(CliSimulate, DeviceChoiceIsHonouredOrExplained) {
+  const std::string out = (dir_ / "dev").string();
+  std::string err;
+  const bool gpu = gpu_unavailable_reason().empty();
+  int code = run("simulate '" + scene_ + "' --out '" + out + "' --set time.steps=2 --device cuda", &err);
+  if (gpu) {
+    EXPECT_EQ(code, 0) << err;
+  } else {
+    EXPECT_EQ(code, 2) << err;
+    EXPECT_NE(err.find("--device cuda: no usable GPU: "), std::string::npos) << err;
+    EXPECT_NE(err.find("use --device cpu or --device auto"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(out));
+  }
+  code = run("simulate '" + scene_ + "' --out '" + out + "' --set time.steps=2 --device auto", &err);
+  EXPECT_EQ(code, 0) << err;
+  EXPECT_NE(err.find(gpu ? "running on" : "running on the CPU"), std::string::npos) << err;
 }
 
 TEST_F(CliSimulate, BadSceneFailsWithoutOutput) {
