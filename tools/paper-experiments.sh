@@ -102,20 +102,29 @@ if [ "$mode" = full ]; then
   for p in 0.2 0.8; do run "phimax$p" 1 50 0.01 "$p"; done
   for opt in gd lbfgs rprop-paper; do run "opt-$opt" 1 50 0.01 0.4 --optimizer "$opt"; done
   run fd-rprop 1 50 0.01 0.4 --gradient fd
-  k=0
-  while read -r polar azimuth height vx vy vz; do
-    ground="{\"angles_deg\":[$polar,$azimuth],\"height\":$height,\"stiffness\":1e6,\"softmin_alpha\":200}"
-    sets=(--set "ground=$ground" --set "initial.linear_velocity=[$vx,$vy,$vz]")
-    [ $k -eq 0 ] && ball0_sets=("${sets[@]}")
-    run_scene "ball$k" examples/paper-ball.json youngs_modulus 20 30 \
-      "ground_polar=${polar},azimuth=${azimuth},height=${height};v0=($vx,$vy,$vz)" "${sets[@]}"
-    k=$((k + 1))
-  done < <(ball_settings)
+  # The ball on a stiff penalty ground (stiffness 1e6 N/m^2 per unit area, soft-min 200 /m) and,
+  # rows "-soft", on the torus example's ground (1e5, 50 /m).
+  for ground_kind in stiff soft; do
+    if [ $ground_kind = stiff ]; then contact='"stiffness":1e6,"softmin_alpha":200'; suffix=""; else
+      contact='"stiffness":1e5,"softmin_alpha":50'; suffix="-soft"; fi
+    k=0
+    while read -r polar azimuth height vx vy vz; do
+      ground="{\"angles_deg\":[$polar,$azimuth],\"height\":$height,$contact}"
+      sets=(--set "ground=$ground" --set "initial.linear_velocity=[$vx,$vy,$vz]")
+      [ $k -eq 0 ] && [ $ground_kind = stiff ] && ball0_sets=("${sets[@]}")
+      run_scene "ball$k$suffix" examples/paper-ball.json youngs_modulus 20 30 \
+        "${ground_kind}_ground;polar=${polar},azimuth=${azimuth},height=${height};v0=($vx,$vy,$vz)" "${sets[@]}"
+      k=$((k + 1))
+    done < <(ball_settings)
+  done
   for opt in gd lbfgs; do
     run_scene "ball0-$opt" examples/paper-ball.json youngs_modulus 20 30 "setting_of_ball0;optimizer_$opt" \
       "${ball0_sets[@]}" --optimizer "$opt"
   done
-  run_scene ball-multi examples/paper-ball.json gravity.y,youngs_modulus,stiffness_damping 60 20 "flat_ground;v0=(0.5,-1.5,0)"
+  run_scene ball-multi examples/paper-ball.json gravity.y,youngs_modulus,stiffness_damping 60 20 "stiff_flat_ground;v0=(0.5,-1.5,0)"
+  run_scene ball-multi-soft examples/paper-ball.json gravity.y,youngs_modulus,stiffness_damping 60 20 \
+    "soft_flat_ground;v0=(0.5,-1.5,0)" --set 'ground={"height":0,"normal":[0,1,0],"stiffness":1e5,"softmin_alpha":50}'
+
   dragon_obs='{"every":1,"noise":0.002,"seed":42,"depth_scale":0.0001,"phi_max":0.03,"cameras":[{"name":"side","width":50,"height":50,"fov_deg":50,"eye":[0.9,0.45,0.2],"target":[0,0.2,0],"min_depth":0.1,"max_depth":3}]}'
   run_scene dragon examples/dragon.json youngs_modulus 20 30 "fixed_base;10_steps;1_camera_50x50" \
     --set "observation=$dragon_obs" --set time.steps=10

@@ -116,6 +116,9 @@ def scene_summary(name, fit):
 scene_rows = []
 if os.path.exists(os.path.join(out, "scenes.txt")):
     scene_rows = [line.split() for line in open(os.path.join(out, "scenes.txt"))]
+    SCENE_ORDER = [f"ball{k}" for k in range(6)] + [f"ball{k}-soft" for k in range(6)] + [
+        "ball0-gd", "ball0-lbfgs", "ball-multi", "ball-multi-soft", "dragon"]
+    scene_rows.sort(key=lambda r: SCENE_ORDER.index(r[0]) if r[0] in SCENE_ORDER else len(SCENE_ORDER))
 if scene_rows:
     print("""
 ## The ball and the dragon
