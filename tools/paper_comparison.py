@@ -93,6 +93,8 @@ def scene_summary(name, fit):
     names = fit.split(",")
     truth = r["nominal"]
     done = [s_ for s_ in r["starts"] if s_["final"] is not None]
+    if not done:
+        return 0, len(r["starts"]), "every start failed", "-", where(r)
     if len(names) == 1:
         # converged: within 10 % of the truth
         n = names[0]
