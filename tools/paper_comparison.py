@@ -101,9 +101,9 @@ def scene_summary(name, fit):
         conv = [s_ for s_ in done if abs(s_["final"][n] - truth[n]) / abs(truth[n]) < 0.10]
     else:
         # several parameters can trade off (the paper's point): converged = final cost within
-        # 2x of the lowest, i.e. an equally good explanation of the data
+        # 10 % of the lowest, i.e. an equally good explanation of the data
         low = min(s_["final_cost"] for s_ in done)
-        conv = [s_ for s_ in done if s_["final_cost"] <= 2 * low]
+        conv = [s_ for s_ in done if s_["final_cost"] <= 1.1 * low]
     errs = []
     for n in names:
         e = [abs(s_["final"][n] - truth[n]) / abs(truth[n]) for s_ in conv]
@@ -128,24 +128,35 @@ if scene_rows:
 The ball (examples/paper-ball.json: radius 0.1 m, Young's modulus 2000 Pa, 20 steps of 10 ms, one
 bounce, one 50x50 camera, noise 0.005 m, phi_max 0.04 m) on six ground planes and initial velocities
 drawn once with a fixed seed (tilt up to 25 degrees, any azimuth), the same 20 starts (seed 7) for
-each; the same ball with gravity, Young's modulus and stiffness damping fitted together from 60
-starts; the fixed dragon (examples/dragon.json, 10 steps, one 50x50 camera). Single-parameter rows
-count a start converged within 10 % of the truth; the multi-parameter row counts the starts whose
-final cost is within 2x of the lowest (equally good explanations) and gives the range of each
-parameter over them.
+each, twice: on a stiff penalty ground (stiffness 1e6, soft-min 200 /m; rows ball0-ball5) and on
+the torus example's softer ground (1e5, 50 /m; rows ball0-soft-ball5-soft); the same ball with
+gravity, Young's modulus and stiffness damping fitted together from 60 starts; the fixed dragon
+(examples/dragon.json, 10 steps, one 50x50 camera). Single-parameter rows count a start converged
+within 10 % of the truth; the multi-parameter rows count the starts whose final cost is within
+10 % of the lowest (equally good explanations) and give the range of each parameter over them.
 
-Unlike the paper's, this ball's cost has local minima in Young's modulus above about 1.5x the
-truth: a sweep of the ball0 setting (`ssc sweep examples/paper-ball.json --param
-youngs_modulus=200:20000:31 --log`, same overrides) falls monotonically from 200 Pa to the
-minimum at 2000 Pa, then has further dips near 3700, 5900 and 12600 Pa (costs 4.6e-4, 1.4e-3 and
-1.3e-3 against 1.25e-4 at the truth), with phi_max 0.04 m and 0.1 m alike, so the saturation of
-the cost is not the cause: the stiffer balls' bounces differ non-monotonically from the soft one
-(contact timing and rebound). Starts below the truth converge; starts far above stop in those
+On the soft ground every start of every setting converges, as in the paper. On the stiff ground
+the cost has local minima in Young's modulus above about 1.5x the truth: a sweep of the ball0
+setting (`ssc sweep examples/paper-ball.json --param youngs_modulus=200:20000:31 --log`, same
+overrides) falls monotonically from 200 Pa to the minimum at 2000 Pa, then has further dips near
+3700, 5900 and 12600 Pa (costs 4.6e-4, 1.4e-3 and 1.3e-3 against 1.25e-4 at the truth), with
+phi_max 0.04 m and 0.1 m alike, so the cost's saturation is not the cause; the same sweep on the
+soft ground rises monotonically on both sides of 2000 Pa with the gradient's sign right at every
+sample. The stiff contact makes the bounce (contact timing, rebound) depend non-monotonically on
+the ball's stiffness. Starts below the truth still converge there; starts far above stop in the
 dips. Picking the start with the lowest final cost, as `ssc reconstruct` does, recovers Young's
-modulus within 1 % in four of the six settings (ball1: 7 %; ball2: no start reached the basin in
-30 iterations). The multi-parameter row shows the same: 20 iterations leave most of the 60 starts
-in higher minima; the five best lie within 16 % of the true Young's modulus and show the trade-off of
-gravity and stiffness damping.
+modulus within 1 % in four of the six stiff settings (ball1: 7 %; ball2: no start reached the basin
+in 30 iterations). A ground's penalty stiffness is a modelling choice that decides how
+identifiable the material is from a bounce.
+
+Fitting gravity, Young's modulus and stiffness damping together (60 starts, 20 iterations): on the
+soft ground the lowest cost (1.24e-4, the noise floor of the single-parameter rows) is reached
+with gravity -9.97 m/s^2, 2026 Pa and 0.0104 s; 24 starts end within 10 % of it, along a valley in
+which all three trade off (gravity -12.6 to -6.7 m/s^2, Young's modulus 1563 to 2458 Pa, damping
+0.0062 to 0.016 s), and 53 within 2x. The paper reports all 60 at almost zero cost with gravity
+recovered and Young's modulus and damping trading off; here, with 0.005 m of noise and 20 steps,
+gravity trades off too. On the stiff ground 1 start ends within 10 % of the lowest cost (5
+within 2x): the same local minima as above.
 """)
     print("| configuration | scene | fitted | starts x iterations | setting | ssc: converged | ssc: mean rel. error | ssc: best start (wall time, device) | paper |")
     print("|---|---|---|---|---|---|---|---|---|")
