@@ -20,6 +20,7 @@ const char* extent_name(Extent e) {
     case Extent::Band: return "band";
     case Extent::Len: return "vec";
     case Extent::Item: return "item";
+    case Extent::Grid: return "grid";
   }
   return "?";
 }

@@ -20,12 +20,19 @@ namespace ssc {
 
 // How many threads (per batch item) a kernel runs. Item: one block of SSC_ITEM threads
 // per batch item that cooperates (strided loops over the item's vectors, fixed-order
-// block reductions); its fragments see i = threadIdx.x.
-enum class Extent { One, Cell, Node, Point, Band, Len, Item };
+// block reductions); its fragments see i = threadIdx.x. Grid: a cooperative launch of
+// gridDim.x blocks of SSC_GRID threads per batch item, chosen at run time, all resident
+// at once; its fragments loop over their domains themselves (gen::grid_rank(),
+// gen::grid_threads()) and synchronise the item's blocks with gen::grid_sync /
+// gen::grid_sum (persistent solver loops).
+enum class Extent { One, Cell, Node, Point, Band, Len, Item, Grid };
 const char* extent_name(Extent e);
 Domain extent_domain(Extent e);
 
 constexpr int kItemBlock = 1024;  // threads of an Extent::Item block (SSC_ITEM)
+constexpr int kGridBlock = 256;      // threads of an Extent::Grid block (SSC_GRID)
+constexpr int kMaxGridBlocks = 256;  // blocks per batch item of an Extent::Grid kernel
+constexpr int kMaxSolveLog = 8;      // solves per step whose final state is kept (s_cg_log)
 constexpr int kMaxPlaneBars = 32;  // 4 cotangent values x ops::kMaxGroundPlanes
 
 struct KernelParam {

@@ -107,6 +107,239 @@ std::vector<Snippet> pcg_snippets(const Graph& g, int op) {
   return s;
 }
 
+// ---- Persistent grid solves (Extent::Grid) ----
+//
+// One cooperative kernel runs a whole Jacobi-PCG solve for every batch item: gridDim.x
+// blocks per item, the item's blocks meeting at grid barriers. Per iteration: the
+// operator apply, p.q (grid_sum), the x/r/z update with r.z and |r| (grid_sum). The
+// direction update p = z + beta p of the interpreter is folded into the next apply,
+// which evaluates z + beta p where it reads p, and the thread owning a node stores it,
+// so no barrier of its own is needed. Each thread owns the same nodes in every phase,
+// so a node's q and p are read back by the thread that wrote them. The final state goes
+// to s_cg, to slot log_slot of s_cg_log (read by the host once per step) and the
+// iteration count to v_iterations[0].
+
+// The bindings every grid solve shares: solver vectors, values, state and grid scratch.
+// The barrier counter is per kernel: its arrivals come in multiples of that kernel's
+// block count (grid_sync).
+Builder& grid_solve_params(Builder& b, const std::string& len, const std::string& kernel) {
+  b.vec("x", true, len, true).vec("b", false, len).vec("r", true, len).vec("z", true, len, true);
+  b.vec("p", true, len, true).vec("q", true, len).vec("inv_diag", false, len).vec("iterations", true, "1");
+  b.value("tol", "double").value("max_it", "int").value("log_slot", "int");
+  b.scratch("cg", "cg", "double", Domain::Scalar, 16, true);
+  b.scratch("cg_log", "cg_log", "double", Domain::Scalar, 16 * kMaxSolveLog, true);
+  b.scratch("partial", "grid_partial", "double", Domain::Scalar, 2 * 4 * kMaxGridBlocks, true);
+  return b.scratch("bar", "grid_barrier_" + kernel, "double", Domain::Scalar, 1, true);
+}
+
+std::string grid_prologue() {
+  return fmt::format(
+      "unsigned long long* bar = reinterpret_cast<unsigned long long*>($bar);\n"
+      "double* part_q = $partial;  // p.q partial sums\n"
+      "double* part_r = $partial + {};  // r.z, |r| partial sums (a separate buffer: no barrier between)\n"
+      "const int rank = gen::grid_rank(), threads = gen::grid_threads();\n",
+      4 * kMaxGridBlocks);
+}
+
+// After the start reduction acc = {|b|^2, r.z, |r|^2}: the convergence test of
+// runtime/pcg.h, then the loop (`iteration` computes pq, step, acc2 = {r.z, |r|^2}).
+std::string grid_loop(const std::string& own_nodes, const std::string& iteration) {
+  return "const double b_norm = sqrt(acc[0]);\n"
+         "double rz = acc[1], r_norm = sqrt(acc[2]), rel = 0, pq_last = 0;\n"
+         "Real beta = Real(0), step_last = Real(0);\n"
+         "int its = 0;\n"
+         "bool active = false, converged = false;\n"
+         "auto test = [&]() {\n"
+         "  rel = r_norm / b_norm;\n"
+         "  active = false;\n"
+         "  converged = false;\n"
+         "  if (rel <= tol) converged = true;\n"
+         "  else if (its < max_it && isfinite(r_norm)) active = true;\n"
+         "};\n"
+         "if (b_norm == 0.0) {\n"
+         "  " + own_nodes + " for (int k = 0; k < 3; ++k) v_x[3 * n + k] = Real(0);\n"
+         "  converged = true;\n"
+         "} else {\n"
+         "  test();\n"
+         "}\n"
+         "while (active) {\n" + iteration +
+         "  beta = Real(acc2[0] / rz);\n"
+         "  rz = acc2[0];\n"
+         "  r_norm = sqrt(acc2[1]);\n"
+         "  ++its;\n"
+         "  test();\n"
+         "}\n"
+         "if (rank == 0) {\n"
+         "  const double st[10] = {b_norm, rz, r_norm, pq_last, double(step_last), double(beta), 0, double(its),\n"
+         "                         rel, converged ? 1.0 : 0.0};\n"
+         "  for (int k = 0; k < 16; ++k) {\n"
+         "    $cg[k] = k < 10 ? st[k] : 0.0;\n"
+         "    $cg_log[16 * log_slot + k] = $cg[k];\n"
+         "  }\n"
+         "  v_iterations[0] = Real(its);\n"
+         "}\n";
+}
+
+// x += step p, r -= step q, z = M^-1 r over the thread's own nodes, with r.z and |r|^2.
+std::string grid_update(const std::string& own_nodes, const std::string& p) {
+  return "  const Real step = Real(rz / pq[0]);\n"
+         "  double acc2[2] = {0, 0};\n"
+         "  " + own_nodes + "\n"
+         "    for (int k = 0; k < 3; ++k) {\n"
+         "      const int j = 3 * n + k;\n"
+         "      v_x[j] += step * " + p + "[j];\n"
+         "      const Real rk = v_r[j] - step * v_q[j];\n"
+         "      const Real zk = v_inv_diag[j] * rk;\n"
+         "      v_r[j] = rk;\n"
+         "      v_z[j] = zk;\n"
+         "      acc2[0] += double(rk) * double(zk);\n"
+         "      acc2[1] += double(rk) * double(rk);\n"
+         "    }\n"
+         "  gen::grid_sum<2>(acc2, part_r, bar);\n"
+         "  pq_last = pq[0];\n"
+         "  step_last = step;\n";
+}
+
+// The start over the thread's own nodes, given q = A x at node n: r = b - q, z, p = z,
+// and the sums |b|^2, r.z, |r|^2.
+std::string grid_start(const std::string& own_nodes, const std::string& q_of_x) {
+  return "double acc[3] = {0, 0, 0};\n" + own_nodes + " {\n" + q_of_x +
+         "  for (int k = 0; k < 3; ++k) {\n"
+         "    const int j = 3 * n + k;\n"
+         "    const Real bk = v_b[j];\n"
+         "    const Real rk = bk - q[k];\n"
+         "    const Real zk = v_inv_diag[j] * rk;\n"
+         "    v_r[j] = rk;\n"
+         "    v_z[j] = zk;\n"
+         "    v_p[j] = zk;\n"
+         "    acc[0] += double(bk) * double(bk);\n"
+         "    acc[1] += double(rk) * double(zk);\n"
+         "    acc[2] += double(rk) * double(rk);\n"
+         "  }\n"
+         "}\n"
+         "gen::grid_sum<3>(acc, part_q, bar);\n";
+}
+
+// The time-step system (a_m M + a_k K) on the free nodes, identity on fixed ones:
+// newmark_apply_cell and newmark_apply_node as two phases with a grid barrier between.
+Snippet newmark_grid_loop(const Graph& g, int op) {
+  Builder b(g, op, "newmark_pcg_grid", Extent::Grid);
+  b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
+  newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
+  b.scratch("corner", "corner", "Real", Domain::Cell, 24, true, true);
+  grid_solve_params(b, "3 * n_node", "newmark");
+  b.stage("whole PCG solve in one cooperative kernel: element apply, node gather, update (grid barriers)", true);
+  const std::string own = "for (int n = rank; n < n_node; n += threads)";
+  return b.code(std::string(kCoefficients) + grid_prologue() +
+      "// The thread's first cell corner and node keep their incidence in registers for the\n"
+      "// whole solve (one load chain less per phase); further ones (small grids) load it.\n"
+      "const int corner_node = rank < 8 * n_cell ? g_cell_nodes[rank] : 0;\n"
+      "int node_entry[8], node_entries = 0;\n"
+      "if (rank < n_node) {\n"
+      "  const int first = g_node_cell_offset[rank];\n"
+      "  node_entries = g_node_cell_offset[rank + 1] - first;\n"
+      "#pragma unroll\n"
+      "  for (int k = 0; k < 8; ++k) node_entry[k] = k < node_entries ? g_node_cell_entry[first + k] : 0;\n"
+      "}\n"
+      "// Corners of R K R^T e per cell, e = v + beta w (newmark_apply_cell's corotated_apply),\n"
+      "// eight lanes per cell: lane c rotates corner c, gets its edge neighbours' rotated\n"
+      "// vectors and stress columns by warp shuffles, and assembles corner c.\n"
+      "auto cells = [&](const Real* v, const Real* w, Real beta) {\n"
+      "  const int lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;\n"
+      "  for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop\n"
+      "    const bool valid = t < lanes;\n"
+      "    const int e = valid ? t >> 3 : 0, c = t & 7;\n"
+      "    const int nd = !valid ? 0 : t == rank ? corner_node : g_cell_nodes[t];\n"
+      "    Vec3<Real> pv = load3(v, nd);\n"
+      "    if (beta != Real(0)) pv = pv + beta * load3(w, nd);\n"
+      "    const Mat3<Real> R = gen::load_mat3($rotation, e);\n"
+      "    const Vec3<Real> q = mul_transposed(R, pv);\n"
+      "    const Vec3<Real> qn[3] = {gen::shfl_xor3(q, 1), gen::shfl_xor3(q, 2), gen::shfl_xor3(q, 4)};\n"
+      "    Vec3<Real> col[3];\n"
+      "    ops::element_corner_columns(c, g_cell_weights[t], $lambda[0], $mu[0], h, q, qn, col);\n"
+      "    const Vec3<Real> y = R * ops::element_corner_assemble(col, gen::shfl_xor3(col[0], 1),\n"
+      "                                                          gen::shfl_xor3(col[1], 2), gen::shfl_xor3(col[2], 4));\n"
+      "    if (valid) store3($corner, t, y);\n"
+      "  }\n"
+      "  gen::grid_sync(bar);\n"
+      "};\n"
+      "// q at node n for the node value e (newmark_apply_node; the same sum order as\n"
+      "// ops::gather_corner_sum).\n"
+      "auto node_q = [&](int n, Vec3<Real> e) {\n"
+      "  Vec3<Real> kp = zero3<Real>();\n"
+      "  if (n == rank && node_entries <= 8) {\n"
+      "#pragma unroll\n"
+      "    for (int k = 0; k < 8; ++k)\n"
+      "      if (k < node_entries) kp += load3($corner, node_entry[k]);\n"
+      "  } else {\n"
+      "    kp = ops::gather_corner_sum($corner, g_node_cell_offset, g_node_cell_entry, n);\n"
+      "  }\n"
+      "  return $fixed[n] != Real(0) ? e : ops::newmark_system_apply(c, $mass[n], e, kp);\n"
+      "};\n"
+      "cells(v_x, v_x, Real(0));\n" +
+      grid_start(own, "  const Vec3<Real> q = node_q(n, load3(v_x, n));\n") +
+      grid_loop(own,
+                "  cells(v_z, v_p, beta);\n"
+                "  double pq[1] = {0};\n"
+                "  " + own + " {\n"
+                "    Vec3<Real> p = load3(v_z, n);\n"
+                "    if (beta != Real(0)) p = p + beta * load3(v_p, n);\n"
+                "    const Vec3<Real> q = node_q(n, p);\n"
+                "    store3(v_p, n, p);\n"
+                "    store3(v_q, n, q);\n"
+                "    for (int k = 0; k < 3; ++k) pq[0] += double(p[k]) * double(q[k]);\n"
+                "  }\n"
+                "  gen::grid_sum<1>(pq, part_q, bar);\n" +
+                grid_update(own, "v_p")));
+}
+
+// The band Laplacian: deg(n) e(n) - sum of e over the band neighbours, e = z + beta p.
+// Neighbours are read where other threads write p, so p alternates between v_p and v_p2.
+Snippet extension_grid_loop(const Graph& g, int op) {
+  Builder b(g, op, "extension_pcg_grid", Extent::Grid);
+  b.grid("band_neighbors", "int").grid("band_degree", "int").vec("p2", true, "3 * n_band", true);
+  grid_solve_params(b, "3 * n_band", "extension");
+  b.stage("whole PCG solve in one cooperative kernel: band Laplacian, update (grid barriers)", true);
+  const std::string own = "for (int n = rank; n < n_band; n += threads)";
+  return b.code(grid_prologue() +
+      "// The thread's first band node keeps its degree and neighbours in registers.\n"
+      "int own_nb[6];\n"
+      "#pragma unroll\n"
+      "for (int d = 0; d < 6; ++d) own_nb[d] = rank < n_band ? g_band_neighbors[6 * rank + d] : -1;\n"
+      "const int own_degree = rank < n_band ? g_band_degree[rank] : 0;\n"
+      "// q = L e at band node n, e = v + beta w; e(n) into en (extension_apply).\n"
+      "auto laplacian = [&](const Real* v, const Real* w, Real beta, int n, Vec3<Real>& en) {\n"
+      "  auto at = [&](int m) { return beta != Real(0) ? load3(v, m) + beta * load3(w, m) : load3(v, m); };\n"
+      "  const bool own = n == rank;\n"
+      "  en = at(n);\n"
+      "  Vec3<Real> s = Real(own ? own_degree : g_band_degree[n]) * en;\n"
+      "#pragma unroll\n"
+      "  for (int d = 0; d < 6; ++d) {\n"
+      "    const int nb = own ? own_nb[d] : g_band_neighbors[6 * n + d];\n"
+      "    if (nb >= 0) s -= at(nb);\n"
+      "  }\n"
+      "  return s;\n"
+      "};\n"
+      "Real* p_now = v_p;\n"
+      "Real* p_next = v_p2;\n" +
+      grid_start(own, "  Vec3<Real> en;\n  const Vec3<Real> q = laplacian(v_x, v_x, Real(0), n, en);\n") +
+      grid_loop(own,
+                "  double pq[1] = {0};\n"
+                "  " + own + " {\n"
+                "    Vec3<Real> p;\n"
+                "    const Vec3<Real> q = laplacian(v_z, p_now, beta, n, p);\n"
+                "    store3(p_next, n, p);\n"
+                "    store3(v_q, n, q);\n"
+                "    for (int k = 0; k < 3; ++k) pq[0] += double(p[k]) * double(q[k]);\n"
+                "  }\n"
+                "  gen::grid_sum<1>(pq, part_q, bar);\n" +
+                grid_update(own, "p_next") +
+                "  Real* t = p_now;\n"
+                "  p_now = p_next;\n"
+                "  p_next = t;\n"));
+}
+
+
 std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   const std::string x3 = "3 * n_node";
   std::vector<Snippet> s;
@@ -118,13 +351,13 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
         "  $u[3 * i + k] = $fixed[i] != Real(0) ? Real(0) : $u_prev[3 * i + k] + $dt[0] * $v_prev[3 * i + k];\n"));
   }
   {
-    Builder b(g, op, "newmark_diag", Extent::Cell);
-    b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real");
-    b.scratch("corner", "corner", "Real", Domain::Cell, 24, true).stage("Jacobi diagonal, per cell corner", true);
+    Builder b(g, op, "newmark_diag", Extent::Len);
+    b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").value("len", "int");
+    b.scratch("corner", "corner", "Real", Domain::Cell, 24, true).stage("Jacobi diagonal, one thread per cell corner", true);
     s.push_back(b.code(
-        "Vec3<Real> d[8];\n"
-        "ops::corotated_diagonal(gen::load_mat3($rotation, i), g_cell_weights + 8 * i, $lambda[0], $mu[0], h, d);\n"
-        "for (int k = 0; k < 8; ++k) store3($corner, 8 * i + k, d[k]);\n"));
+        "const int cell = i >> 3;\n"
+        "store3($corner, i, ops::corotated_diagonal_corner(gen::load_mat3($rotation, cell), g_cell_weights + 8 * cell, "
+        "$lambda[0], $mu[0], h, i & 7));\n"));
   }
   {
     Builder b(g, op, "newmark_setup", Extent::Node);
@@ -167,6 +400,7 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
         "store3(v_q, i, $fixed[i] != Real(0) ? load3(v_p, i) : ops::newmark_system_apply(c, $mass[i], load3(v_p, i), kp));\n"));
   }
   for (Snippet& p : pcg_snippets(g, op)) s.push_back(p);
+  s.push_back(newmark_grid_loop(g, op));
   return s;
 }
 
@@ -214,64 +448,10 @@ std::vector<Snippet> extension_solver(const Graph& g, int op, bool adjoint) {
         "store3(v_q, i, s);\n"));
   }
   for (Snippet& p : pcg_snippets(g, op)) s.push_back(p);
-  {
-    // The whole PCG loop of the band Laplacian in one block per item: apply (neighbour
-    // reads of p within the item's own vector, so a block barrier suffices) and the same
-    // arithmetic as pcg_iterate, until the convergence test stops it; no host checks.
-    Builder b(g, op, "extension_pcg_loop", Extent::Item);
-    b.grid("band_neighbors", "int").grid("band_degree", "int");
-    b.vec("x", true, x3).vec("r", true, x3).vec("z", true, x3).vec("p", true, x3, true).vec("q", true, x3);
-    b.vec("inv_diag", false, x3).value("len", "int").value("tol", "double").value("max_it", "int");
-    b.scratch("cg", "cg", "double", Domain::Scalar, 16, true);
-    b.stage("loop: whole PCG loop, band Laplacian q = L p + the pcg_iterate update (block per item)", true);
-    s.push_back(b.code(
-        "const double b_norm = $cg[0];\n"
-        "double rz = $cg[1], its = $cg[7];\n"
-        "bool active = $cg[6] != 0.0;\n"
-        "__syncthreads();  // every thread has read the state before thread 0 rewrites it\n"
-        "while (active) {\n"
-        "  for (int n = i; n < n_band; n += SSC_ITEM) {\n"
-        "    Vec3<Real> s = Real(g_band_degree[n]) * load3(v_p, n);\n"
-        "    for (int d = 0; d < 6; ++d) {\n"
-        "      const int nb = g_band_neighbors[6 * n + d];\n"
-        "      if (nb >= 0) s -= load3(v_p, nb);\n"
-        "    }\n"
-        "    store3(v_q, n, s);\n"
-        "  }\n"
-        "  __syncthreads();\n"
-        "  double pq[1] = {0};\n"
-        "  for (int k = i; k < len; k += SSC_ITEM) pq[0] += double(v_p[k]) * double(v_q[k]);\n"
-        "  gen::block_sum<1>(pq);\n"
-        "  const Real step = Real(rz / pq[0]);\n"
-        "  double acc[2] = {0, 0};\n"
-        "  for (int k = i; k < len; k += SSC_ITEM) {\n"
-        "    v_x[k] += step * v_p[k];\n"
-        "    const Real rk = v_r[k] - step * v_q[k];\n"
-        "    const Real zk = v_inv_diag[k] * rk;\n"
-        "    v_r[k] = rk;\n"
-        "    v_z[k] = zk;\n"
-        "    acc[0] += double(rk) * double(zk);\n"
-        "    acc[1] += double(rk) * double(rk);\n"
-        "  }\n"
-        "  gen::block_sum<2>(acc);\n"
-        "  const Real beta = Real(acc[0] / rz);\n"
-        "  for (int k = i; k < len; k += SSC_ITEM) v_p[k] = v_z[k] + beta * v_p[k];\n"
-        "  __syncthreads();  // p complete before the next apply reads neighbours\n"
-        "  rz = acc[0];\n"
-        "  its += 1;\n"
-        "  const double r_norm = sqrt(acc[1]);\n"
-        "  const double rel = r_norm / b_norm;\n"
-        "  bool converged = false;\n"
-        "  if (rel <= tol) { active = false; converged = true; }\n"
-        "  else if (its >= double(max_it) || !isfinite(r_norm)) active = false;\n"
-        "  if (i == 0) {\n"
-        "    $cg[1] = rz; $cg[2] = r_norm; $cg[3] = pq[0]; $cg[4] = double(step); $cg[5] = double(beta);\n"
-        "    $cg[6] = active ? 1 : 0; $cg[7] = its; $cg[8] = rel; $cg[9] = converged ? 1 : 0;\n"
-        "  }\n"
-        "}\n"));
-  }
+  s.push_back(extension_grid_loop(g, op));
   return s;
 }
+
 
 }  // namespace
 

@@ -37,32 +37,55 @@ SSC_HD inline Vec3<Real> corner_offset(int c, Real h) {
   return {h * Real(corner_bit(c, 0)), h * Real(corner_bit(c, 1)), h * Real(corner_bit(c, 2))};
 }
 
-// y = K_e q for the unrotated element (q, y: 8 corner vectors). At corner v only N_v and
-// its three edge neighbours n_a = v ^ (1 << a) have a non-zero gradient there:
-// grad N_v(v) = s_v / h and grad N_{n_a}(v) = -s_v[a] e_a / h, with s_v = 2 b_v - 1.
+// The weighted stress columns of quadrature corner v, col[a] = s_v[a] w_v sigma_v e_a, from
+// the rotated-frame corner vectors q_v and its edge neighbours qn[a] = q_{v ^ (1 << a)}. At
+// corner v only N_v and its three edge neighbours have a non-zero gradient:
+// grad N_v(v) = s_v / h and grad N_{v ^ (1 << a)}(v) = -s_v[a] e_a / h, s_v = 2 b_v - 1.
+template <class Real>
+SSC_HD inline void element_corner_columns(int v, Real w_v, Real lambda, Real mu, Real h, Vec3<Real> q_v,
+                                          const Vec3<Real>* qn, Vec3<Real>* col) {
+  if (w_v == Real(0)) {
+    for (int a = 0; a < 3; ++a) col[a] = zero3<Real>();
+    return;
+  }
+  const Real inv_h = Real(1) / h;
+  Real s[3];
+  for (int a = 0; a < 3; ++a) s[a] = corner_bit(v, a) ? inv_h : -inv_h;
+  Mat3<Real> G;  // displacement gradient at corner v, column a = s_a (q_v - q_{n_a})
+  for (int a = 0; a < 3; ++a) {
+    const Vec3<Real> d = q_v - qn[a];
+    for (int i = 0; i < 3; ++i) G.m[i][a] = s[a] * d[i];
+  }
+  const Real tr = trace(G);
+  Mat3<Real> S;  // w_v * stress
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) S.m[i][j] = w_v * (mu * (G.m[i][j] + G.m[j][i]) + (i == j ? lambda * tr : Real(0)));
+  for (int a = 0; a < 3; ++a) col[a] = s[a] * make_vec3(S.m[0][a], S.m[1][a], S.m[2][a]);
+}
+
+// Force at corner c from its own columns and the columns its edge neighbours send it,
+// y_c = sum_a own[a] - sum_a col_{c ^ (1 << a)}[a]: the element apply with one thread per
+// corner (GPU solver loops). The sequential element_stiffness_apply adds the same terms
+// in corner order, so the two differ by rounding only.
+template <class Real>
+SSC_HD inline Vec3<Real> element_corner_assemble(const Vec3<Real>* own, Vec3<Real> from_x, Vec3<Real> from_y,
+                                                 Vec3<Real> from_z) {
+  return own[0] + own[1] + own[2] - from_x - from_y - from_z;
+}
+
+// y = K_e q for the unrotated element (q, y: 8 corner vectors).
 template <class Real>
 SSC_HD inline void element_stiffness_apply(const Real* w, Real lambda, Real mu, Real h,
                                            const Vec3<Real>* q, Vec3<Real>* y) {
   for (int c = 0; c < 8; ++c) y[c] = zero3<Real>();
-  const Real inv_h = Real(1) / h;
   for (int v = 0; v < 8; ++v) {
     if (w[v] == Real(0)) continue;
-    Real s[3];
-    for (int a = 0; a < 3; ++a) s[a] = corner_bit(v, a) ? inv_h : -inv_h;
-    Mat3<Real> G;  // displacement gradient at corner v, column a = s_a (q_v - q_{n_a})
+    const Vec3<Real> qn[3] = {q[v ^ 1], q[v ^ 2], q[v ^ 4]};
+    Vec3<Real> col[3];
+    element_corner_columns(v, w[v], lambda, mu, h, q[v], qn, col);
     for (int a = 0; a < 3; ++a) {
-      const Vec3<Real> d = q[v] - q[v ^ (1 << a)];
-      for (int i = 0; i < 3; ++i) G.m[i][a] = s[a] * d[i];
-    }
-    const Real tr = trace(G);
-    Mat3<Real> S;  // w_v * stress
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        S.m[i][j] = w[v] * (mu * (G.m[i][j] + G.m[j][i]) + (i == j ? lambda * tr : Real(0)));
-    for (int a = 0; a < 3; ++a) {
-      const Vec3<Real> col = make_vec3(S.m[0][a], S.m[1][a], S.m[2][a]);
-      y[v] += s[a] * col;
-      y[v ^ (1 << a)] -= s[a] * col;
+      y[v] += col[a];
+      y[v ^ (1 << a)] -= col[a];
     }
   }
 }
@@ -91,22 +114,26 @@ SSC_HD inline void corotation_offset_force(const Mat3<Real>& R, const Real* w, R
   for (int c = 0; c < 8; ++c) f[c] = -(R * yl[c]);
 }
 
-// Diagonal entries of the 3x3 diagonal blocks of R K_e R^T (for Jacobi preconditioning).
+// Diagonal entries of the 3x3 diagonal block of corner c of R K_e R^T (Jacobi).
+template <class Real>
+SSC_HD inline Vec3<Real> corotated_diagonal_corner(const Mat3<Real>& R, const Real* w, Real lambda, Real mu, Real h,
+                                                   int c) {
+  Mat3<Real> K = zero33<Real>();
+  for (int v = 0; v < 8; ++v) {
+    const Vec3<Real> a = shape_gradient_at_corner<Real>(c, v, h);
+    const Real aa = dot(a, a);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) K.m[i][j] += w[v] * ((lambda + mu) * a[i] * a[j] + (i == j ? mu * aa : Real(0)));
+  }
+  const Mat3<Real> Kr = R * K * transpose(R);
+  return make_vec3(Kr.m[0][0], Kr.m[1][1], Kr.m[2][2]);
+}
+
+// The same for all 8 corners.
 template <class Real>
 SSC_HD inline void corotated_diagonal(const Mat3<Real>& R, const Real* w, Real lambda, Real mu, Real h,
                                       Vec3<Real>* d) {
-  for (int c = 0; c < 8; ++c) {
-    Mat3<Real> K = zero33<Real>();
-    for (int v = 0; v < 8; ++v) {
-      const Vec3<Real> a = shape_gradient_at_corner<Real>(c, v, h);
-      const Real aa = dot(a, a);
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j)
-          K.m[i][j] += w[v] * ((lambda + mu) * a[i] * a[j] + (i == j ? mu * aa : Real(0)));
-    }
-    const Mat3<Real> Kr = R * K * transpose(R);
-    d[c] = make_vec3(Kr.m[0][0], Kr.m[1][1], Kr.m[2][2]);
-  }
+  for (int c = 0; c < 8; ++c) d[c] = corotated_diagonal_corner(R, w, lambda, mu, h, c);
 }
 
 // Elastic energy 1/2 q^T K_e q with q_c = R^T (x_c + u_c) - x_c.

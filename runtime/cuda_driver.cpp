@@ -59,6 +59,8 @@ Loaded load() {
   opt(d.GraphLaunch, "cuGraphLaunch");
   opt(d.GraphExecDestroy, "cuGraphExecDestroy");
   opt(d.GraphDestroy, "cuGraphDestroy");
+  opt(d.LaunchCooperativeKernel, "cuLaunchCooperativeKernel");
+  opt(d.OccupancyMaxActiveBlocksPerMultiprocessor, "cuOccupancyMaxActiveBlocksPerMultiprocessor");
   if (const Result r = d.Init(0); r != 0) {
     const char* s = nullptr;
     d.GetErrorString(r, &s);

@@ -52,6 +52,11 @@ struct Driver {
   Result (*GraphLaunch)(GraphExec, Stream);
   Result (*GraphExecDestroy)(GraphExec);
   Result (*GraphDestroy)(Graph);
+  // Cooperative launches (grid barriers): optional as well.
+  Result (*LaunchCooperativeKernel)(Function, unsigned, unsigned, unsigned, unsigned, unsigned, unsigned, unsigned,
+                                    Stream, void**);
+  Result (*OccupancyMaxActiveBlocksPerMultiprocessor)(int*, Function, int, size_t);
+  bool has_cooperative() const { return LaunchCooperativeKernel && OccupancyMaxActiveBlocksPerMultiprocessor; }
   bool has_graphs() const {
     return StreamCreate && StreamDestroy && StreamBeginCapture && StreamEndCapture && GraphInstantiate && GraphLaunch &&
            GraphExecDestroy && GraphDestroy;
@@ -63,6 +68,7 @@ constexpr int kCaptureModeThreadLocal = 1;   // CU_STREAM_CAPTURE_MODE_THREAD_LO
 
 // Attribute ids (cuda.h values).
 constexpr int kAttrComputeCapabilityMajor = 75, kAttrComputeCapabilityMinor = 76;
+constexpr int kAttrMultiprocessorCount = 16, kAttrCooperativeLaunch = 95;
 constexpr int kFuncAttrNumRegs = 4, kFuncAttrSharedSizeBytes = 1, kFuncAttrLocalSizeBytes = 3;
 
 // The loaded driver with cuInit done and at least one device, or nullptr; `why` then

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 
@@ -42,8 +43,8 @@ namespace {
 
 using gpu_detail::kBlock;
 
-bool graphs_disabled_by_env() {
-  const char* e = std::getenv("SSC_GPU_GRAPHS");
+bool disabled_by_env(const char* name) {
+  const char* e = std::getenv(name);
   return e && std::string(e) == "0";
 }
 
@@ -181,7 +182,9 @@ void GpuTimestep::Impl::allocate_scratch(const std::vector<PlannedKernel>& kerne
       }
   // Solver vectors, for the longer of node and band vectors.
   const size_t len_max = 3 * size_t(std::max(sizes.node, sizes.band));
-  for (const char* v : {"v_r", "v_z", "v_p", "v_q", "v_b", "v_inv_diag"}) need[v] = size_t(batch) * len_max * real_size;
+  for (const char* v : {"v_r", "v_z", "v_p", "v_p2", "v_q", "v_b", "v_inv_diag"})
+    need[v] = size_t(batch) * len_max * real_size;
+  need["v_iterations_sink"] = size_t(batch) * real_size;  // iteration counts nobody reads on the device
   for (auto& [n, bytes] : need) {
     auto it = scratch.find(n);
     if (it != scratch.end() && it->second.bytes >= bytes) continue;
@@ -222,9 +225,40 @@ void GpuTimestep::Impl::setup() {
   upload_grid();
   allocate_scratch(plan.forward);
   cg_iterations.assign(batch, 0);
-  use_graphs = options.graphs && !options.profile && !graphs_disabled_by_env() && d->has_graphs() &&
+  use_graphs = options.graphs && !options.profile && !disabled_by_env("SSC_GPU_GRAPHS") && d->has_graphs() &&
                d->StreamCreate(&capture_stream, cu::kStreamNonBlocking) == 0;
   if (!use_graphs) capture_stream = nullptr;
+  decide_grid_solves();
+}
+
+void GpuTimestep::Impl::decide_grid_solves() {
+  grid_solves = false;
+  int cooperative = 0;
+  d->DeviceGetAttribute(&cooperative, cu::kAttrCooperativeLaunch, device);
+  d->DeviceGetAttribute(&multiprocessors, cu::kAttrMultiprocessorCount, device);
+  if (!options.grid_solves || disabled_by_env("SSC_GPU_GRID_SOLVES") || !d->has_cooperative() || !cooperative)
+    return;
+  bool fits = true;
+  for (const PlannedKernel& k : plan.forward) {
+    if (k.extent != Extent::Grid || grid_capacity.count(k.name)) continue;
+    int per_sm = 0;
+    cu::check(d->OccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, functions.at(k.name), kGridBlock, 0),
+              ("cuOccupancyMaxActiveBlocksPerMultiprocessor " + k.name).c_str());
+    grid_capacity[k.name] = per_sm * multiprocessors;
+    fits &= per_sm * multiprocessors >= batch;
+  }
+  grid_solves = fits && !grid_capacity.empty();
+}
+
+// Blocks per batch item for a grid kernel over `work` threads' worth of nodes or cells:
+// one node per thread (SSC_GPU_GRID_SPREAD=s: s per thread), at most what keeps every
+// block of the batch resident.
+unsigned GpuTimestep::Impl::grid_blocks(const PlannedKernel& k, long work) const {
+  double spread = 1;
+  if (const char* e = std::getenv("SSC_GPU_GRID_SPREAD")) spread = std::max(0.01, std::atof(e));
+  const long want = long(std::ceil(double(work) / (kGridBlock * spread)));
+  const long fit = std::min<long>(kMaxGridBlocks, grid_capacity.at(k.name) / batch);
+  return unsigned(std::clamp<long>(want, 1, std::max<long>(1, fit)));
 }
 
 void GpuTimestep::Impl::ensure_adjoint() {
@@ -248,6 +282,7 @@ size_t GpuTimestep::Impl::extent_count(Extent e, long len) const {
     case Extent::Band: return sizes.band;
     case Extent::Len: return size_t(len);
     case Extent::Item: return 1;
+    case Extent::Grid: return 1;
   }
   return 0;
 }
@@ -325,6 +360,11 @@ void GpuTimestep::Impl::launch(const PlannedKernel& k, const Call& call) {
   if (k.extent == Extent::Item) {
     pl.grid_x = 1;
     pl.block = kItemBlock;
+  } else if (k.extent == Extent::Grid) {
+    if (call.blocks == 0) throw std::logic_error("gpu: grid kernel " + k.name + " launched without a block count");
+    pl.grid_x = call.blocks;
+    pl.block = kGridBlock;
+    pl.cooperative = true;
   } else {
     pl.grid_x = unsigned((n + kBlock - 1) / kBlock);
     pl.block = kBlock;
@@ -342,8 +382,12 @@ void GpuTimestep::Impl::submit(Pending& pl, cu::Stream stream) {
   for (unsigned long long& s : pl.slots) args.push_back(&s);
   const std::string& name = pl.kernel->name;
   const auto start = std::chrono::steady_clock::now();
-  cu::check(d->LaunchKernel(pl.function, pl.grid_x, pl.grid_y, 1, pl.block, 1, 1, 0, stream, args.data(), nullptr),
-            ("cuLaunchKernel " + name).c_str());
+  if (pl.cooperative)
+    cu::check(d->LaunchCooperativeKernel(pl.function, pl.grid_x, pl.grid_y, 1, pl.block, 1, 1, 0, stream, args.data()),
+              ("cuLaunchCooperativeKernel " + name).c_str());
+  else
+    cu::check(d->LaunchKernel(pl.function, pl.grid_x, pl.grid_y, 1, pl.block, 1, 1, 0, stream, args.data(), nullptr),
+              ("cuLaunchKernel " + name).c_str());
   if (options.profile) {
     cu::check(d->CtxSynchronize(), ("kernel " + name).c_str());
     GpuKernelTiming& t = timing[name];
@@ -371,13 +415,19 @@ void GpuTimestep::Impl::close_segment() {
     cu::check(d->StreamBeginCapture(capture_stream, cu::kCaptureModeThreadLocal), "cuStreamBeginCapture");
     try {
       for (Pending& pl : pending) submit(pl, capture_stream);
-    } catch (...) {
-      d->StreamEndCapture(capture_stream, &captured);
+      cu::check(d->StreamEndCapture(capture_stream, &captured), "cuStreamEndCapture");
+    } catch (const std::exception& e) {
+      if (!captured) d->StreamEndCapture(capture_stream, &captured);
       if (captured) d->GraphDestroy(captured);
+      // A driver that cannot capture this segment (cooperative launches, say): launch
+      // directly from now on.
+      fmt::print(stderr, "ssc: CUDA graphs off ({}); launching kernels directly\n", e.what());
+      use_graphs = false;
+      for (Pending& pl : pending) submit(pl, nullptr);
       pending.clear();
-      throw;
+      replaying = false;
+      return;
     }
-    cu::check(d->StreamEndCapture(capture_stream, &captured), "cuStreamEndCapture");
     graph_list.push_back(captured);
     cu::GraphExec exec = nullptr;
     cu::check(d->GraphInstantiate(&exec, captured, 0), "cuGraphInstantiate");
@@ -407,7 +457,7 @@ std::vector<double> GpuTimestep::Impl::solver_state() const {
 // pcg_iterate. The host reads the solver state every check_every iterations; the
 // iterations in between form one graph segment (`tag`). Returns the iterations per item.
 std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, int max_it, const Apply& apply,
-                                        const char* what, const std::string& tag, const PlannedKernel* whole_loop) {
+                                        const char* what, const std::string& tag) {
   Call c;
   c.len = len;
   c.values = {{"tol", tol}, {"max_it", double(max_it)}};
@@ -421,11 +471,6 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
   }
   const int check_every = std::max(1, options.check_every);
   std::vector<double> s;
-  if (whole_loop) {  // one block per item runs the loop to its end: one check
-    if (recording()) launch(*whole_loop, c);
-    close_segment();
-    s = solver_state();
-  }
   // The first host check comes after as many iterations as this solve needed last time
   // (rounded up to check_every): consecutive steps need similar counts, and an iteration
   // launched for a solve that has already stopped returns at once, far cheaper than a
@@ -435,11 +480,9 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
   int first = check_every;
   if (const auto last = last_iterations.find(tag); last != last_iterations.end())
     first = std::clamp((last->second + check_every - 1) / check_every * check_every, check_every, 16 * check_every);
-  if (!whole_loop) {
-    close_segment();
-    open_segment(fmt::format("{}/first {}", tag, first));
-  }
-  for (int it = 0; !whole_loop;) {
+  close_segment();
+  open_segment(fmt::format("{}/first {}", tag, first));
+  for (int it = 0;;) {
     if (it > 0) open_segment(tag + "/chunk");
     const int chunk = it == 0 ? first : check_every;
     if (recording())
@@ -467,6 +510,44 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
                                         what, k, s[16 * k + 8], iterations[k], tol));
   }
   return iterations;
+}
+
+// The whole solve as one cooperative grid kernel (b and inv_diag already in v_b,
+// v_inv_diag), no host check: its outcome is read after the step (read_solve_checks).
+// `iterations` receives the iteration count per batch item on the device.
+void GpuTimestep::Impl::grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it,
+                                 cu::DevicePtr iterations, const char* what, std::vector<int>* iterations_out) {
+  const int slot = int(solve_checks.size());
+  if (slot >= kMaxSolveLog) throw std::logic_error("gpu: more grid solves in one step than s_cg_log holds");
+  Call c;
+  c.blocks = grid_blocks(k, work);
+  c.values = {{"tol", tol}, {"max_it", double(max_it)}, {"log_slot", double(slot)}};
+  for (const char* v : {"v_b", "v_r", "v_z", "v_p", "v_p2", "v_q", "v_inv_diag"}) c.vectors[v] = scratch.at(v).ptr;
+  c.vectors["v_x"] = x;
+  c.vectors["v_iterations"] = iterations;
+  launch(k, c);
+  solve_checks.push_back({slot, what, tol, iterations_out});
+}
+
+// After a step: iterations and convergence of its grid solves, from s_cg_log.
+void GpuTimestep::Impl::read_solve_checks() {
+  if (solve_checks.empty()) return;
+  const size_t per_item = 16 * size_t(kMaxSolveLog);
+  std::vector<double> log(size_t(batch) * per_item);
+  cu::check(d->MemcpyDtoH(log.data(), scratch.at("s_cg_log").ptr, log.size() * 8), "download solver states");
+  const std::vector<SolveCheck> checks = std::move(solve_checks);
+  solve_checks.clear();
+  for (const SolveCheck& c : checks) {
+    if (c.iterations) c.iterations->assign(batch, 0);
+    for (int k = 0; k < batch; ++k) {
+      const double* st = log.data() + size_t(k) * per_item + 16 * size_t(c.slot);
+      if (c.iterations) (*c.iterations)[k] = int(st[7]);
+      if (st[9] == 0.0)
+        throw SimulationError(fmt::format("the {} did not converge on the GPU (batch item {}): relative residual "
+                                          "{:.3g} after {} CG iterations (tolerance {:.3g})",
+                                          c.what, k, st[8], int(st[7]), c.tolerance));
+    }
+  }
 }
 
 // One Real per batch item.

@@ -10,9 +10,11 @@
 // becomes the Jacobi-PCG kernel sequence (element apply, node gather, and per iteration
 // one block-per-item kernel doing the dot products, scalars, axpys and the direction
 // update), every item of the batch frozen on the device at the iteration where its
-// convergence test passes, with a host check of the solver state every `check_every`
-// iterations. The launches between two host checks are captured once as a CUDA graph and
-// replayed. run_adjoint() does the same with the adjoint plan, on the forward values left
+// convergence test passes. Where the batch fits on the GPU at once, each solve is instead
+// one persistent cooperative kernel (grid barriers between its phases) and the host reads
+// the solves' outcomes once, after the step; otherwise the host checks the solver state
+// every `check_every` iterations. The launches between two host reads are captured once
+// as a CUDA graph and replayed. run_adjoint() does the same with the adjoint plan, on the forward values left
 // on the device by the last run(): cotangents of the step's outputs in, cotangents of its
 // inputs and state out, parameter cotangents accumulated over a backward pass. Dot
 // products are summed in double in a fixed order (per-thread strided sums, then a fixed
@@ -49,10 +51,11 @@ struct GpuOptions {
   int check_every = 8;          // CG iterations between host checks of the solver state
   bool profile = false;         // synchronise after every launch and time it (no graphs)
   bool graphs = true;           // replay launch segments as CUDA graphs (SSC_GPU_GRAPHS=0: off)
-  // Extension PCG loop in one block-per-item kernel, no host checks (SSC_GPU_FUSED_EXTENSION=0/1
-  // overrides). Off: one SM is slower than the multi-block band apply for bands of ~10k
-  // nodes (H200: torus double 6.18 ms on, 4.85 ms off).
-  bool fused_extension = false;
+  // Each solve as one persistent cooperative kernel (grid barriers, no host checks inside
+  // a step) where the batch fits on the GPU at once; off, or when it does not fit: the
+  // per-iteration kernels with host checks every check_every iterations
+  // (SSC_GPU_GRID_SOLVES=0 turns it off).
+  bool grid_solves = true;
 };
 
 struct GpuKernelTiming {

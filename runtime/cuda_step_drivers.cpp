@@ -3,7 +3,9 @@
 //
 // Forward: newmark_init, diag, setup, then PCG with the element apply (cell kernel,
 // node gather) on u; the extension: setup (rhs from the active neighbours, the guess),
-// PCG with the band Laplacian on band_u.
+// PCG with the band Laplacian on band_u. Each PCG is one persistent grid kernel
+// (newmark_pcg_grid, extension_pcg_grid) when grid solves are on, whose outcomes the host
+// reads after the step; else the host-driven iteration kernels.
 // Adjoint (implicit-function adjoints, as runtime/interpreter_adjoint.cpp): the
 // extension's cotangent solve L y = band_u_bar into scratch y (warm-started from the
 // previous, later step's y within one backward pass), the time-step system's
@@ -18,13 +20,6 @@
 
 namespace ssc {
 namespace {
-
-bool fused_extension_enabled(bool option) {
-  const char* e = std::getenv("SSC_GPU_FUSED_EXTENSION");
-  if (e && std::string(e) == "0") return false;
-  if (e && std::string(e) == "1") return true;
-  return option;
-}
 
 std::string scratch_of(const char* key, int op) { return fmt::format("s_{}_op{}", key, op); }
 
@@ -52,14 +47,12 @@ GpuTimestep::Impl::Apply GpuTimestep::Impl::extension_apply() {
   };
 }
 
-const PlannedKernel* GpuTimestep::Impl::extension_loop() const {
-  return fused_extension_enabled(options.fused_extension) ? plan.find(false, "extension_pcg_loop") : nullptr;
-}
-
 // Jacobi diagonal and the masked right-hand side of the time-step system into v_inv_diag and
 // v_b; x is zeroed on fixed nodes (everywhere with zero_x).
 void GpuTimestep::Impl::newmark_setup(cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x) {
-  launch(kernel("newmark_diag"));
+  Call diag;
+  diag.len = 8L * sizes.cell;
+  launch(kernel("newmark_diag"), diag);
   Call setup;
   setup.vectors = {{"v_rhs", rhs}, {"v_x", x}, {"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
   setup.values = {{"zero_x", zero_x ? 1 : 0}};
@@ -71,6 +64,11 @@ void GpuTimestep::Impl::newmark(int o) {
   const cu::DevicePtr u = tensors.at(op.output("u")).ptr, rhs = tensors.at(op.input("rhs")).ptr;
   launch(kernel("newmark_init"));
   newmark_setup(rhs, u, false);
+  if (grid_solves) {
+    grid_pcg(kernel("newmark_pcg_grid"), u, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
+             solver.cg_max_iterations, tensors.at(op.output("cg_iterations")).ptr, "time-step solve", &cg_iterations);
+    return;
+  }
   cg_iterations = pcg(u, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(),
                       "time-step solve", fmt::format("newmark {}", o));
   write_iterations(op.output("cg_iterations"), cg_iterations);
@@ -82,14 +80,19 @@ void GpuTimestep::Impl::extension(int o) {
   Call setup;
   setup.vectors = {{"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
   launch(kernel("extension_setup"), setup);
-  pcg(x, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, extension_apply(),
-      "displacement extension", fmt::format("extension {}", o), extension_loop());
+  if (grid_solves)
+    grid_pcg(kernel("extension_pcg_grid"), x, sizes.band, solver.extension_tolerance, solver.extension_max_iterations,
+             scratch.at("v_iterations_sink").ptr, "displacement extension", nullptr);
+  else
+    pcg(x, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, extension_apply(),
+        "displacement extension", fmt::format("extension {}", o));
 }
 
 void GpuTimestep::Impl::launch_plan(const std::vector<PlannedKernel>& kernels, const std::string& first_segment,
                                     const std::function<void(int)>& solve, const char* what) {
   cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
   segment_count = 0;
+  solve_checks.clear();
   open_segment(first_segment);
   int solved = -1;
   for (const PlannedKernel& k : kernels) {
@@ -104,6 +107,7 @@ void GpuTimestep::Impl::launch_plan(const std::vector<PlannedKernel>& kernels, c
   }
   close_segment();
   cu::check(d->CtxSynchronize(), what);
+  read_solve_checks();
 }
 
 void GpuTimestep::Impl::run() {
@@ -120,6 +124,12 @@ void GpuTimestep::Impl::adjoint_newmark(int o) {
   const OpNode& op = graph.ops()[o];
   const cu::DevicePtr w = scratch.at(scratch_of("w", o)).ptr;
   newmark_setup(adjoints.at(op.output("u")).ptr, w, true);
+  if (grid_solves) {
+    grid_pcg(kernel("newmark_pcg_grid"), w, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
+             solver.cg_max_iterations, scratch.at("v_iterations_sink").ptr, "adjoint time-step solve",
+             &adjoint_cg_iterations);
+    return;
+  }
   adjoint_cg_iterations = pcg(w, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(),
                               "adjoint time-step solve", fmt::format("adjoint newmark {}", o));
 }
@@ -130,8 +140,12 @@ void GpuTimestep::Impl::adjoint_extension(int o) {
   setup.vectors = {{"v_x", y}, {"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
   setup.values = {{"zero_x", fresh_backward ? 1 : 0}};
   launch(kernel("extension_adj_setup", true), setup);
-  pcg(y, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, extension_apply(),
-      "adjoint displacement extension", fmt::format("adjoint extension {}", o), extension_loop());
+  if (grid_solves)
+    grid_pcg(kernel("extension_pcg_grid"), y, sizes.band, solver.extension_tolerance, solver.extension_max_iterations,
+             scratch.at("v_iterations_sink").ptr, "adjoint displacement extension", nullptr);
+  else
+    pcg(y, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, extension_apply(),
+        "adjoint displacement extension", fmt::format("adjoint extension {}", o));
 }
 
 void GpuTimestep::Impl::run_adjoint() {

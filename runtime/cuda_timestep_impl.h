@@ -22,6 +22,7 @@ struct Pending {
   const PlannedKernel* kernel = nullptr;
   cu::Function function = nullptr;
   unsigned grid_x = 1, grid_y = 1, block = kBlock;
+  bool cooperative = false;  // Extent::Grid: all blocks resident (cuLaunchCooperativeKernel)
   std::vector<unsigned long long> slots;
 };
 
@@ -35,6 +36,16 @@ struct Call {
   std::map<std::string, cu::DevicePtr> vectors;
   std::map<std::string, double> values;
   long len = 0;
+  unsigned blocks = 0;  // Extent::Grid: blocks per batch item
+};
+
+// A grid solve launched in this step whose outcome (s_cg_log slot) the host reads after
+// the step: iterations and convergence per batch item.
+struct SolveCheck {
+  int slot = 0;
+  std::string what;
+  double tolerance = 0;
+  std::vector<int>* iterations = nullptr;  // filled per batch item
 };
 
 }  // namespace gpu_detail
@@ -43,6 +54,7 @@ struct GpuTimestep::Impl {
   using Buffer = gpu_detail::Buffer;
   using Call = gpu_detail::Call;
   using Pending = gpu_detail::Pending;
+  using SolveCheck = gpu_detail::SolveCheck;
   using Apply = std::function<void(cu::DevicePtr, cu::DevicePtr, int)>;
 
   const Graph& graph;
@@ -84,6 +96,13 @@ struct GpuTimestep::Impl {
   int segment_count = 0;
   std::map<std::string, int> last_iterations;  // per solve tag: the most iterations of an item, last time
   std::string segment_prefix = "segment";
+  // Persistent grid solves (one cooperative kernel per solve, no host checks inside a
+  // step): on when the driver and device support cooperative launches and every batch
+  // item gets at least one block of each grid kernel (SSC_GPU_GRID_SOLVES=0: off).
+  bool grid_solves = false;
+  int multiprocessors = 0;
+  std::map<std::string, int> grid_capacity;  // per grid kernel: resident blocks on the device
+  std::vector<SolveCheck> solve_checks;       // this step's grid solves, read after it
 
   Impl(const Graph& g, const SimGrid& gr, int b, const SolverOptions& s, const GpuOptions& o)
       : graph(g), grid(gr), batch(b), solver(s), options(o) {}
@@ -110,13 +129,17 @@ struct GpuTimestep::Impl {
   const PlannedKernel& kernel(const std::string& label, bool adjoint = false) const;
   std::vector<double> solver_state() const;
   std::vector<int> pcg(cu::DevicePtr x, long len, double tol, int max_it, const Apply& apply, const char* what,
-                       const std::string& tag, const PlannedKernel* whole_loop = nullptr);
+                       const std::string& tag);
+  void decide_grid_solves();
+  unsigned grid_blocks(const PlannedKernel& k, long work) const;
+  void grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it, cu::DevicePtr iterations,
+                const char* what, std::vector<int>* iterations_out);
+  void read_solve_checks();
   void write_iterations(int tensor, const std::vector<int>& iterations);
 
   // cuda_step_drivers.cpp: what a step launches
   Apply newmark_apply();
   Apply extension_apply();
-  const PlannedKernel* extension_loop() const;
   void launch_plan(const std::vector<PlannedKernel>& kernels, const std::string& first_segment,
                    const std::function<void(int)>& solve, const char* what);
   void newmark_setup(cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x);
