@@ -110,21 +110,25 @@ std::vector<Snippet> pcg_snippets(const Graph& g, int op) {
 // ---- Persistent grid solves (Extent::Grid) ----
 //
 // One cooperative kernel runs a whole Jacobi-PCG solve for every batch item: gridDim.x
-// blocks per item, the item's blocks meeting at grid barriers. Per iteration: the
-// operator apply, p.q (grid_sum), the x/r/z update with r.z and |r| (grid_sum). The
-// direction update p = z + beta p of the interpreter is folded into the next apply,
-// which evaluates z + beta p where it reads p, and the thread owning a node stores it,
-// so no barrier of its own is needed. Each thread owns the same nodes in every phase,
-// so a node's q and p are read back by the thread that wrote them. The final state goes
-// to s_cg, to slot log_slot of s_cg_log (read by the host once per step) and the
-// iteration count to v_iterations[0].
+// blocks per item, the item's blocks meeting at grid barriers. The iteration is the
+// Chronopoulos-Gear form of PCG (the same iterates as runtime/pcg.h in exact arithmetic,
+// one reduction per iteration instead of two):
+//   s = w + beta s,  p = u + beta p,  x += alpha p,  r -= alpha s,  u = M^-1 r,  w = A u,
+//   gamma' = r.u,  delta = w.u,  beta = gamma' / gamma,
+//   alpha = gamma' / (delta - beta gamma' / alpha).
+// The apply A u needs u at neighbouring nodes before their owners have updated it, so
+// every thread evaluates u there from the previous iteration's r, w, s (next_u below):
+// the same expression, the same bits as the owner's. Each thread owns the same nodes in
+// every phase. The final state goes to s_cg, to slot log_slot of s_cg_log (read by the
+// host once per step) and the iteration count to v_iterations[0].
 
 // The bindings every grid solve shares: solver vectors, values, state and grid scratch.
 // The barrier counter is per kernel: its arrivals come in multiples of that kernel's
 // block count (grid_sync).
 Builder& grid_solve_params(Builder& b, const std::string& len, const std::string& kernel) {
-  b.vec("x", true, len, true).vec("b", false, len).vec("r", true, len).vec("z", true, len, true);
-  b.vec("p", true, len, true).vec("q", true, len).vec("inv_diag", false, len).vec("iterations", true, "1");
+  b.vec("x", true, len, true).vec("b", false, len).vec("inv_diag", false, len, true);
+  b.vec("r", true, len, true).vec("w", true, len, true).vec("s", true, len, true);
+  b.vec("z", true, len, true).vec("p", true, len).vec("iterations", true, "1");
   b.value("tol", "double").value("max_it", "int").value("log_slot", "int");
   b.scratch("cg", "cg", "double", Domain::Scalar, 16, true);
   b.scratch("cg_log", "cg_log", "double", Domain::Scalar, 16 * kMaxSolveLog, true);
@@ -135,18 +139,72 @@ Builder& grid_solve_params(Builder& b, const std::string& len, const std::string
 std::string grid_prologue() {
   return fmt::format(
       "unsigned long long* bar = reinterpret_cast<unsigned long long*>($bar);\n"
-      "double* part_q = $partial;  // p.q partial sums\n"
-      "double* part_r = $partial + {};  // r.z, |r| partial sums (a separate buffer: no barrier between)\n"
-      "const int rank = gen::grid_rank(), threads = gen::grid_threads();\n",
+      "// Consecutive grid_sums alternate between two partial-sum buffers: a block may write\n"
+      "// the next sum's partials while another still reads this one's.\n"
+      "double* const partial0 = $partial;\n"
+      "double* const partial1 = $partial + {};\n"
+      "int parity = 0;\n"
+      "const int rank = gen::grid_rank(), threads = gen::grid_threads();\n"
+      "auto times = [](Vec3<Real> a, Vec3<Real> b) {{ return make_vec3(a.x * b.x, a.y * b.y, a.z * b.z); }};\n"
+      "Real step = Real(0), beta = Real(0);  // alpha and beta of the iteration under way\n",
       4 * kMaxGridBlocks);
 }
 
-// After the start reduction acc = {|b|^2, r.z, |r|^2}: the convergence test of
-// runtime/pcg.h, then the loop (`iteration` computes pq, step, acc2 = {r.z, |r|^2}).
-std::string grid_loop(const std::string& own_nodes, const std::string& iteration) {
-  return "const double b_norm = sqrt(acc[0]);\n"
-         "double rz = acc[1], r_norm = sqrt(acc[2]), rel = 0, pq_last = 0;\n"
-         "Real beta = Real(0), step_last = Real(0);\n"
+// u_{k+1} at node m from the previous iteration's vectors in r, w, s.
+std::string grid_next_u(const std::string& r, const std::string& w, const std::string& s) {
+  return "auto next_u = [&](int m) {\n"
+         "  const Vec3<Real> sm = load3(" + w + ", m) + beta * load3(" + s + ", m);\n"
+         "  return times(load3(v_inv_diag, m), load3(" + r + ", m) - step * sm);\n"
+         "};\n"
+         "// The operand of an apply at node m: the start's x or u, or the loop's next u.\n"
+         "constexpr int kX = 0, kU = 1, kNextU = 2;\n"
+         "auto value = [&](int source, int m) {\n"
+         "  return source == kX ? load3(v_x, m) : source == kU ? load3(v_z, m) : next_u(m);\n"
+         "};\n";
+}
+
+// The start's first half over the thread's own nodes, given q = A x at node n:
+// r = b - q, u = M^-1 r, s = p = 0 (the previous directions), |b|^2 into bb.
+std::string grid_start_residual(const std::string& own, const std::string& q_of_x, const std::string& r,
+                                const std::string& s) {
+  return "double bb = 0;\n" + own + " {\n" + q_of_x +
+         "  const Vec3<Real> bn = load3(v_b, n), rn = bn - q;\n"
+         "  store3(" + r + ", n, rn);\n"
+         "  store3(v_z, n, times(load3(v_inv_diag, n), rn));\n"
+         "  store3(" + s + ", n, zero3<Real>());\n"
+         "  store3(v_p, n, zero3<Real>());\n"
+         "  for (int k = 0; k < 3; ++k) bb += double(bn[k]) * double(bn[k]);\n"
+         "}\n"
+         "gen::grid_sync(bar);\n";
+}
+
+// The own-node update of one iteration: s, p, x, r, u, and w = A u at node n from `w_of_u`
+// (given u); the sums gamma, delta, |r|^2 into acc.
+std::string grid_own_update(const std::string& r, const std::string& w, const std::string& s,
+                            const std::string& r_out, const std::string& w_out, const std::string& s_out,
+                            const std::string& w_of_u) {
+  return "    const Vec3<Real> sn = load3(" + w + ", n) + beta * load3(" + s + ", n);\n"
+         "    const Vec3<Real> pn = load3(v_z, n) + beta * load3(v_p, n);\n"
+         "    const Vec3<Real> rn = load3(" + r + ", n) - step * sn;\n"
+         "    const Vec3<Real> un = times(load3(v_inv_diag, n), rn);\n" + w_of_u +
+         "    store3(v_x, n, load3(v_x, n) + step * pn);\n"
+         "    store3(" + s_out + ", n, sn);\n"
+         "    store3(v_p, n, pn);\n"
+         "    store3(" + r_out + ", n, rn);\n"
+         "    store3(v_z, n, un);\n"
+         "    store3(" + w_out + ", n, wn);\n"
+         "    for (int k = 0; k < 3; ++k) {\n"
+         "      acc[0] += double(rn[k]) * double(un[k]);\n"
+         "      acc[1] += double(wn[k]) * double(un[k]);\n"
+         "      acc[2] += double(rn[k]) * double(rn[k]);\n"
+         "    }\n";
+}
+
+// From the start's sums (acc = {gamma, delta, |r|^2}, bb): the convergence test of
+// runtime/pcg.h, then the loop (`iteration` leaves the new sums in acc), then the state.
+std::string grid_loop(const std::string& own, const std::string& iteration) {
+  return "const double b_norm = sqrt(bb);\n"
+         "double gamma = acc[0], alpha = acc[0] / acc[1], r_norm = sqrt(acc[2]), rel = 0;\n"
          "int its = 0;\n"
          "bool active = false, converged = false;\n"
          "auto test = [&]() {\n"
@@ -157,21 +215,29 @@ std::string grid_loop(const std::string& own_nodes, const std::string& iteration
          "  else if (its < max_it && isfinite(r_norm)) active = true;\n"
          "};\n"
          "if (b_norm == 0.0) {\n"
-         "  " + own_nodes + " for (int k = 0; k < 3; ++k) v_x[3 * n + k] = Real(0);\n"
+         "  " + own + " store3(v_x, n, zero3<Real>());\n"
          "  converged = true;\n"
          "} else {\n"
          "  test();\n"
          "}\n"
-         "while (active) {\n" + iteration +
-         "  beta = Real(acc2[0] / rz);\n"
-         "  rz = acc2[0];\n"
-         "  r_norm = sqrt(acc2[1]);\n"
+         "step = Real(alpha);\n"
+         "while (active) {\n"
+         "  double acc[3] = {0, 0, 0};\n" + iteration +
+         "  gen::grid_sum<3>(acc, parity ? partial1 : partial0, bar);\n"
+         "  parity ^= 1;\n"
+         "  const double gamma_next = acc[0];\n"
+         "  const double beta_next = gamma_next / gamma;\n"
+         "  alpha = gamma_next / (acc[1] - beta_next * gamma_next / alpha);\n"
+         "  gamma = gamma_next;\n"
+         "  step = Real(alpha);\n"
+         "  beta = Real(beta_next);\n"
+         "  r_norm = sqrt(acc[2]);\n"
          "  ++its;\n"
          "  test();\n"
          "}\n"
          "if (rank == 0) {\n"
-         "  const double st[10] = {b_norm, rz, r_norm, pq_last, double(step_last), double(beta), 0, double(its),\n"
-         "                         rel, converged ? 1.0 : 0.0};\n"
+         "  const double st[10] = {b_norm, gamma, r_norm, 0, alpha, double(beta), 0, double(its), rel,\n"
+         "                         converged ? 1.0 : 0.0};\n"
          "  for (int k = 0; k < 16; ++k) {\n"
          "    $cg[k] = k < 10 ? st[k] : 0.0;\n"
          "    $cg_log[16 * log_slot + k] = $cg[k];\n"
@@ -180,57 +246,19 @@ std::string grid_loop(const std::string& own_nodes, const std::string& iteration
          "}\n";
 }
 
-// x += step p, r -= step q, z = M^-1 r over the thread's own nodes, with r.z and |r|^2.
-std::string grid_update(const std::string& own_nodes, const std::string& p) {
-  return "  const Real step = Real(rz / pq[0]);\n"
-         "  double acc2[2] = {0, 0};\n"
-         "  " + own_nodes + "\n"
-         "    for (int k = 0; k < 3; ++k) {\n"
-         "      const int j = 3 * n + k;\n"
-         "      v_x[j] += step * " + p + "[j];\n"
-         "      const Real rk = v_r[j] - step * v_q[j];\n"
-         "      const Real zk = v_inv_diag[j] * rk;\n"
-         "      v_r[j] = rk;\n"
-         "      v_z[j] = zk;\n"
-         "      acc2[0] += double(rk) * double(zk);\n"
-         "      acc2[1] += double(rk) * double(rk);\n"
-         "    }\n"
-         "  gen::grid_sum<2>(acc2, part_r, bar);\n"
-         "  pq_last = pq[0];\n"
-         "  step_last = step;\n";
-}
-
-// The start over the thread's own nodes, given q = A x at node n: r = b - q, z, p = z,
-// and the sums |b|^2, r.z, |r|^2.
-std::string grid_start(const std::string& own_nodes, const std::string& q_of_x) {
-  return "double acc[3] = {0, 0, 0};\n" + own_nodes + " {\n" + q_of_x +
-         "  for (int k = 0; k < 3; ++k) {\n"
-         "    const int j = 3 * n + k;\n"
-         "    const Real bk = v_b[j];\n"
-         "    const Real rk = bk - q[k];\n"
-         "    const Real zk = v_inv_diag[j] * rk;\n"
-         "    v_r[j] = rk;\n"
-         "    v_z[j] = zk;\n"
-         "    v_p[j] = zk;\n"
-         "    acc[0] += double(bk) * double(bk);\n"
-         "    acc[1] += double(rk) * double(zk);\n"
-         "    acc[2] += double(rk) * double(rk);\n"
-         "  }\n"
-         "}\n"
-         "gen::grid_sum<3>(acc, part_q, bar);\n";
-}
-
-// The time-step system (a_m M + a_k K) on the free nodes, identity on fixed ones:
-// newmark_apply_cell and newmark_apply_node as two phases with a grid barrier between.
+// The time-step system (a_m M + a_k K) on the free nodes, identity on fixed ones: the
+// element apply over cell corners (newmark_apply_cell), a grid barrier, the node gather
+// (newmark_apply_node) with the own-node update; r, w, s are updated in place (the cell
+// phase that reads them at other nodes is over when the node phase writes).
 Snippet newmark_grid_loop(const Graph& g, int op) {
   Builder b(g, op, "newmark_pcg_grid", Extent::Grid);
   b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
   newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
   b.scratch("corner", "corner", "Real", Domain::Cell, 24, true, true);
   grid_solve_params(b, "3 * n_node", "newmark");
-  b.stage("whole PCG solve in one cooperative kernel: element apply, node gather, update (grid barriers)", true);
+  b.stage("whole PCG solve in one cooperative kernel: element apply, node gather and update (grid barriers)", true);
   const std::string own = "for (int n = rank; n < n_node; n += threads)";
-  return b.code(std::string(kCoefficients) + grid_prologue() +
+  return b.code(std::string(kCoefficients) + grid_prologue() + grid_next_u("v_r", "v_w", "v_s") +
       "// The thread's first cell corner and node keep their incidence in registers for the\n"
       "// whole solve (one load chain less per phase); further ones (small grids) load it.\n"
       "const int corner_node = rank < 8 * n_cell ? g_cell_nodes[rank] : 0;\n"
@@ -241,19 +269,18 @@ Snippet newmark_grid_loop(const Graph& g, int op) {
       "#pragma unroll\n"
       "  for (int k = 0; k < 8; ++k) node_entry[k] = k < node_entries ? g_node_cell_entry[first + k] : 0;\n"
       "}\n"
-      "// Corners of R K R^T e per cell, e = v + beta w (newmark_apply_cell's corotated_apply),\n"
-      "// eight lanes per cell: lane c rotates corner c, gets its edge neighbours' rotated\n"
-      "// vectors and stress columns by warp shuffles, and assembles corner c.\n"
-      "auto cells = [&](const Real* v, const Real* w, Real beta) {\n"
+      "// Corners of R K R^T e per cell for the nodal values e = value(source, node)\n"
+      "// (newmark_apply_cell's corotated_apply),"
+      " eight lanes per cell: lane c rotates corner c, gets its edge\n"
+      "// neighbours' rotated vectors and stress columns by warp shuffles, assembles corner c.\n"
+      "auto cells = [&](int source) {\n"
       "  const int lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;\n"
       "  for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop\n"
       "    const bool valid = t < lanes;\n"
       "    const int e = valid ? t >> 3 : 0, c = t & 7;\n"
       "    const int nd = !valid ? 0 : t == rank ? corner_node : g_cell_nodes[t];\n"
-      "    Vec3<Real> pv = load3(v, nd);\n"
-      "    if (beta != Real(0)) pv = pv + beta * load3(w, nd);\n"
       "    const Mat3<Real> R = gen::load_mat3($rotation, e);\n"
-      "    const Vec3<Real> q = mul_transposed(R, pv);\n"
+      "    const Vec3<Real> q = mul_transposed(R, value(source, nd));\n"
       "    const Vec3<Real> qn[3] = {gen::shfl_xor3(q, 1), gen::shfl_xor3(q, 2), gen::shfl_xor3(q, 4)};\n"
       "    Vec3<Real> col[3];\n"
       "    ops::element_corner_columns(c, g_cell_weights[t], $lambda[0], $mu[0], h, q, qn, col);\n"
@@ -263,9 +290,9 @@ Snippet newmark_grid_loop(const Graph& g, int op) {
       "  }\n"
       "  gen::grid_sync(bar);\n"
       "};\n"
-      "// q at node n for the node value e (newmark_apply_node; the same sum order as\n"
+      "// A e at node n for the node value e (newmark_apply_node; the same sum order as\n"
       "// ops::gather_corner_sum).\n"
-      "auto node_q = [&](int n, Vec3<Real> e) {\n"
+      "auto node_apply = [&](int n, Vec3<Real> e) {\n"
       "  Vec3<Real> kp = zero3<Real>();\n"
       "  if (n == rank && node_entries <= 8) {\n"
       "#pragma unroll\n"
@@ -276,69 +303,93 @@ Snippet newmark_grid_loop(const Graph& g, int op) {
       "  }\n"
       "  return $fixed[n] != Real(0) ? e : ops::newmark_system_apply(c, $mass[n], e, kp);\n"
       "};\n"
-      "cells(v_x, v_x, Real(0));\n" +
-      grid_start(own, "  const Vec3<Real> q = node_q(n, load3(v_x, n));\n") +
-      grid_loop(own,
-                "  cells(v_z, v_p, beta);\n"
-                "  double pq[1] = {0};\n"
-                "  " + own + " {\n"
-                "    Vec3<Real> p = load3(v_z, n);\n"
-                "    if (beta != Real(0)) p = p + beta * load3(v_p, n);\n"
-                "    const Vec3<Real> q = node_q(n, p);\n"
-                "    store3(v_p, n, p);\n"
-                "    store3(v_q, n, q);\n"
-                "    for (int k = 0; k < 3; ++k) pq[0] += double(p[k]) * double(q[k]);\n"
-                "  }\n"
-                "  gen::grid_sum<1>(pq, part_q, bar);\n" +
-                grid_update(own, "v_p")));
+      "cells(kX);\n" +
+      grid_start_residual(own, "  const Vec3<Real> q = node_apply(n, load3(v_x, n));\n", "v_r", "v_s") +
+      "cells(kU);\n"
+      "double acc[3] = {0, 0, 0};\n" + own + " {\n"
+      "  const Vec3<Real> un = load3(v_z, n), rn = load3(v_r, n), wn = node_apply(n, un);\n"
+      "  store3(v_w, n, wn);\n"
+      "  for (int k = 0; k < 3; ++k) {\n"
+      "    acc[0] += double(rn[k]) * double(un[k]);\n"
+      "    acc[1] += double(wn[k]) * double(un[k]);\n"
+      "    acc[2] += double(rn[k]) * double(rn[k]);\n"
+      "  }\n"
+      "}\n"
+      "{\n"
+      "  double sums[4] = {acc[0], acc[1], acc[2], bb};\n"
+      "  gen::grid_sum<4>(sums, parity ? partial1 : partial0, bar);\n"
+      "  parity ^= 1;\n"
+      "  for (int k = 0; k < 3; ++k) acc[k] = sums[k];\n"
+      "  bb = sums[3];\n"
+      "}\n" +
+      grid_loop(own, "  cells(kNextU);\n  " + own + " {\n" +
+                         grid_own_update("v_r", "v_w", "v_s", "v_r", "v_w", "v_s",
+                                         "    const Vec3<Real> wn = node_apply(n, un);\n") +
+                         "  }\n"));
 }
 
-// The band Laplacian: deg(n) e(n) - sum of e over the band neighbours, e = z + beta p.
-// Neighbours are read where other threads write p, so p alternates between v_p and v_p2.
+// The band Laplacian L e(n) = deg(n) e(n) - sum of e over the band neighbours: one phase
+// per iteration, each thread evaluating u at its node's neighbours (next_u), so r, w, s
+// alternate between two buffers (neighbours read the previous iteration's while owners
+// write the next).
 Snippet extension_grid_loop(const Graph& g, int op) {
   Builder b(g, op, "extension_pcg_grid", Extent::Grid);
-  b.grid("band_neighbors", "int").grid("band_degree", "int").vec("p2", true, "3 * n_band", true);
+  b.grid("band_neighbors", "int").grid("band_degree", "int");
+  b.vec("r2", true, "3 * n_band", true).vec("w2", true, "3 * n_band", true).vec("s2", true, "3 * n_band", true);
   grid_solve_params(b, "3 * n_band", "extension");
-  b.stage("whole PCG solve in one cooperative kernel: band Laplacian, update (grid barriers)", true);
+  b.stage("whole PCG solve in one cooperative kernel: band Laplacian and update (grid barriers)", true);
   const std::string own = "for (int n = rank; n < n_band; n += threads)";
   return b.code(grid_prologue() +
+      "Real *r_now = v_r, *w_now = v_w, *s_now = v_s, *r_next = v_r2, *w_next = v_w2, *s_next = v_s2;\n" +
+      grid_next_u("r_now", "w_now", "s_now") +
       "// The thread's first band node keeps its degree and neighbours in registers.\n"
       "int own_nb[6];\n"
       "#pragma unroll\n"
       "for (int d = 0; d < 6; ++d) own_nb[d] = rank < n_band ? g_band_neighbors[6 * rank + d] : -1;\n"
       "const int own_degree = rank < n_band ? g_band_degree[rank] : 0;\n"
-      "// q = L e at band node n, e = v + beta w; e(n) into en (extension_apply).\n"
-      "auto laplacian = [&](const Real* v, const Real* w, Real beta, int n, Vec3<Real>& en) {\n"
-      "  auto at = [&](int m) { return beta != Real(0) ? load3(v, m) + beta * load3(w, m) : load3(v, m); };\n"
-      "  const bool own = n == rank;\n"
-      "  en = at(n);\n"
-      "  Vec3<Real> s = Real(own ? own_degree : g_band_degree[n]) * en;\n"
+      "// L e at band node n for the nodal values e = value(source, node); e(n) into en\n"
+      "// (extension_apply).\n"
+      "auto laplacian = [&](int n, int source, Vec3<Real>& en) {\n"
+      "  const bool mine = n == rank;\n"
+      "  en = value(source, n);\n"
+      "  Vec3<Real> s = Real(mine ? own_degree : g_band_degree[n]) * en;\n"
       "#pragma unroll\n"
       "  for (int d = 0; d < 6; ++d) {\n"
-      "    const int nb = own ? own_nb[d] : g_band_neighbors[6 * n + d];\n"
-      "    if (nb >= 0) s -= at(nb);\n"
+      "    const int nb = mine ? own_nb[d] : g_band_neighbors[6 * n + d];\n"
+      "    if (nb >= 0) s -= value(source, nb);\n"
       "  }\n"
       "  return s;\n"
-      "};\n"
-      "Real* p_now = v_p;\n"
-      "Real* p_next = v_p2;\n" +
-      grid_start(own, "  Vec3<Real> en;\n  const Vec3<Real> q = laplacian(v_x, v_x, Real(0), n, en);\n") +
-      grid_loop(own,
-                "  double pq[1] = {0};\n"
-                "  " + own + " {\n"
-                "    Vec3<Real> p;\n"
-                "    const Vec3<Real> q = laplacian(v_z, p_now, beta, n, p);\n"
-                "    store3(p_next, n, p);\n"
-                "    store3(v_q, n, q);\n"
-                "    for (int k = 0; k < 3; ++k) pq[0] += double(p[k]) * double(q[k]);\n"
-                "  }\n"
-                "  gen::grid_sum<1>(pq, part_q, bar);\n" +
-                grid_update(own, "p_next") +
-                "  Real* t = p_now;\n"
-                "  p_now = p_next;\n"
-                "  p_next = t;\n"));
+      "};\n" +
+      grid_start_residual(own,
+                          "  Vec3<Real> xn;\n"
+                          "  const Vec3<Real> q = laplacian(n, kX, xn);\n",
+                          "r_now", "s_now") +
+      "double acc[3] = {0, 0, 0};\n" + own + " {\n"
+      "  Vec3<Real> un;\n"
+      "  const Vec3<Real> wn = laplacian(n, kU, un), rn = load3(r_now, n);\n"
+      "  store3(w_now, n, wn);\n"
+      "  for (int k = 0; k < 3; ++k) {\n"
+      "    acc[0] += double(rn[k]) * double(un[k]);\n"
+      "    acc[1] += double(wn[k]) * double(un[k]);\n"
+      "    acc[2] += double(rn[k]) * double(rn[k]);\n"
+      "  }\n"
+      "}\n"
+      "{\n"
+      "  double sums[4] = {acc[0], acc[1], acc[2], bb};\n"
+      "  gen::grid_sum<4>(sums, parity ? partial1 : partial0, bar);\n"
+      "  parity ^= 1;\n"
+      "  for (int k = 0; k < 3; ++k) acc[k] = sums[k];\n"
+      "  bb = sums[3];\n"
+      "}\n" +
+      grid_loop(own, "  " + own + " {\n"
+                         "    Vec3<Real> u_own;\n"
+                         "    const Vec3<Real> wn = laplacian(n, kNextU, u_own);\n" +
+                         grid_own_update("r_now", "w_now", "s_now", "r_next", "w_next", "s_next", "") +
+                         "  }\n"
+                         "  Real* t = r_now; r_now = r_next; r_next = t;\n"
+                         "  t = w_now; w_now = w_next; w_next = t;\n"
+                         "  t = s_now; s_now = s_next; s_next = t;\n"));
 }
-
 
 std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   const std::string x3 = "3 * n_node";

@@ -182,7 +182,7 @@ void GpuTimestep::Impl::allocate_scratch(const std::vector<PlannedKernel>& kerne
       }
   // Solver vectors, for the longer of node and band vectors.
   const size_t len_max = 3 * size_t(std::max(sizes.node, sizes.band));
-  for (const char* v : {"v_r", "v_z", "v_p", "v_p2", "v_q", "v_b", "v_inv_diag"})
+  for (const char* v : {"v_r", "v_z", "v_p", "v_q", "v_b", "v_inv_diag", "v_w", "v_s", "v_r2", "v_w2", "v_s2"})
     need[v] = size_t(batch) * len_max * real_size;
   need["v_iterations_sink"] = size_t(batch) * real_size;  // iteration counts nobody reads on the device
   for (auto& [n, bytes] : need) {
@@ -522,7 +522,8 @@ void GpuTimestep::Impl::grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long w
   Call c;
   c.blocks = grid_blocks(k, work);
   c.values = {{"tol", tol}, {"max_it", double(max_it)}, {"log_slot", double(slot)}};
-  for (const char* v : {"v_b", "v_r", "v_z", "v_p", "v_p2", "v_q", "v_inv_diag"}) c.vectors[v] = scratch.at(v).ptr;
+  for (const char* v : {"v_b", "v_inv_diag", "v_r", "v_w", "v_s", "v_z", "v_p", "v_r2", "v_w2", "v_s2"})
+    c.vectors[v] = scratch.at(v).ptr;
   c.vectors["v_x"] = x;
   c.vectors["v_iterations"] = iterations;
   launch(k, c);
