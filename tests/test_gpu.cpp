@@ -109,8 +109,15 @@ TEST(GpuForward, ReportsMissingGpuCleanly) {
   }
 }
 
+void print_timings(const GpuTimestep& gpu, const char* real, const char* body) {
+  for (const GpuKernelTiming& t : gpu.timings())
+    std::printf("  %-7s %-12s %-52s %5d launches %8.4f ms/launch %4d regs\n", real, body, t.name.c_str(), t.launches,
+                t.ms / t.launches, t.registers);
+}
+
 // Per-kernel launches and times (synchronised after every launch) of a forward and an
-// adjoint step, and the unprofiled step times, for the torus and the teddy-sized body.
+// adjoint step, and the unprofiled step times, for the torus and the teddy-sized body
+// (and the per-kernel times of a batch of 32 teddy-sized simulations).
 TEST(GpuProfile, TorusAndTeddySteps) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
@@ -151,11 +158,25 @@ TEST(GpuProfile, TorusAndTeddySteps) {
       gpu.upload(store);
       step(gpu, false);
       step(gpu, true);
-      for (const GpuKernelTiming& t : gpu.timings())
-        std::printf("  %-7s %-12s %-52s %5d launches %8.4f ms/launch %4d regs\n", real, body, t.name.c_str(),
-                    t.launches, t.ms / t.launches, t.registers);
+      print_timings(gpu, real, body);
     }
   }
+  // A batch of 32 teddy-sized simulations (the perturbed starts of a reconstruction).
+  const Scene scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/teddy-sized.json");
+  const SimGrid grid = build_body_grid(scene);
+  Simulation sim(scene, grid, 32, true);
+  for (int s = 0; s < 2; ++s) sim.step();
+  const TimestepGraph& tg = sim.timestep_graph();
+  TensorStore<double>& store = sim.interpreter().store();
+  GpuOptions go;
+  go.profile = true;
+  GpuTimestep gpu(tg.graph, grid, 32, sim.interpreter().options(), go);
+  gpu.upload(store);
+  gpu.run();
+  gpu.clear_adjoints(true);
+  for (int t : {tg.u, tg.v, tg.band_u}) gpu.set_adjoint(t, store.all(t));
+  gpu.run_adjoint();
+  print_timings(gpu, "double", "teddy x32");
 }
 
 // ---- adjoint ----
