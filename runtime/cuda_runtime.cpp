@@ -568,11 +568,11 @@ GpuTimestep::GpuTimestep(const Graph& graph, const SimGrid& grid, int batch, con
 
 GpuTimestep::~GpuTimestep() = default;
 
-void GpuTimestep::upload(const TensorStore<double>& store) {
+void GpuTimestep::upload(const TensorStore<double>& store, bool intermediates) {
   Impl& m = *impl_;
   cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
   for (size_t t = 0; t < m.graph.tensors().size(); ++t) {
-    if (m.graph.tensor(int(t)).role == TensorInfo::Role::Intermediate) continue;
+    if (!intermediates && m.graph.tensor(int(t)).role == TensorInfo::Role::Intermediate) continue;
     const std::vector<double>& v = store.all(int(t));
     const std::vector<char> bytes = m.to_real(v.data(), v.size());
     if (!bytes.empty()) cu::check(m.d->MemcpyHtoD(m.tensors[t].ptr, bytes.data(), bytes.size()), "upload tensor");
@@ -624,6 +624,21 @@ void GpuTimestep::get_adjoint(int tensor, std::vector<double>& all_items) const 
 void GpuTimestep::run_adjoint() {
   impl_->ensure_adjoint();
   impl_->run_adjoint();
+}
+
+void GpuTimestep::run_kernels(bool adjoint, int first, int last) {
+  Impl& m = *impl_;
+  if (adjoint) m.ensure_adjoint();
+  const std::vector<PlannedKernel>& plan = adjoint ? m.plan.adjoint : m.plan.forward;
+  if (first < 0 || last >= int(plan.size()) || first > last) throw std::out_of_range("gpu: run_kernels range");
+  const std::string tag = fmt::format("{} kernels {}-{}", adjoint ? "adjoint" : "forward", first, last);
+  m.segment_prefix = tag;
+  m.launch_plan(plan.data() + first, plan.data() + last + 1, tag + " segment 0", [&m, adjoint](int o) {
+    if (adjoint)
+      m.solve_adjoint(o);
+    else
+      m.solve_forward(o);
+  }, tag.c_str());
 }
 
 const std::vector<int>& GpuTimestep::cg_iterations() const { return impl_->cg_iterations; }

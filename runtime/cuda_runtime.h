@@ -74,8 +74,9 @@ class GpuTimestep {
   GpuTimestep(const GpuTimestep&) = delete;
   GpuTimestep& operator=(const GpuTimestep&) = delete;
 
-  // Copies every input and state tensor (all batch items) to the device.
-  void upload(const TensorStore<double>& store);
+  // Copies every input and state tensor (all batch items) to the device; with
+  // intermediates, every tensor (tests of single kernels).
+  void upload(const TensorStore<double>& store, bool intermediates = false);
   // One forward step; throws SimulationError if a solve does not converge.
   void run();
   // Copies every tensor back (converted to double), or one tensor (all batch items).
@@ -92,6 +93,9 @@ class GpuTimestep {
   void get_adjoint(int tensor, std::vector<double>& all_items) const;
   // One adjoint step; throws SimulationError if an adjoint solve does not converge.
   void run_adjoint();
+  // Kernels [first, last] of the forward (adjoint) plan alone, on what the device holds;
+  // a solver stage among them launches its op's whole solve (tests of single kernels).
+  void run_kernels(bool adjoint, int first, int last);
 
   const std::vector<int>& cg_iterations() const;
   const std::vector<int>& adjoint_cg_iterations() const;  // of the last run_adjoint()'s time-step solve

@@ -88,14 +88,16 @@ void GpuTimestep::Impl::extension(int o) {
         "displacement extension", fmt::format("extension {}", o));
 }
 
-void GpuTimestep::Impl::launch_plan(const std::vector<PlannedKernel>& kernels, const std::string& first_segment,
-                                    const std::function<void(int)>& solve, const char* what) {
+void GpuTimestep::Impl::launch_plan(const PlannedKernel* begin, const PlannedKernel* end,
+                                    const std::string& first_segment, const std::function<void(int)>& solve,
+                                    const char* what) {
   cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
   segment_count = 0;
   solve_checks.clear();
   open_segment(first_segment);
   int solved = -1;
-  for (const PlannedKernel& k : kernels) {
+  for (const PlannedKernel* kp = begin; kp != end; ++kp) {
+    const PlannedKernel& k = *kp;
     if (k.stage.empty()) {
       launch(k);
       continue;
@@ -110,14 +112,17 @@ void GpuTimestep::Impl::launch_plan(const std::vector<PlannedKernel>& kernels, c
   read_solve_checks();
 }
 
+void GpuTimestep::Impl::solve_forward(int o) {
+  if (graph.ops()[o].kind == OpKind::NewmarkSolve)
+    newmark(o);
+  else
+    extension(o);
+}
+
 void GpuTimestep::Impl::run() {
   segment_prefix = "segment";
-  launch_plan(plan.forward, "segment 0", [this](int o) {
-    if (graph.ops()[o].kind == OpKind::NewmarkSolve)
-      newmark(o);
-    else
-      extension(o);
-  }, "forward step");
+  launch_plan(plan.forward.data(), plan.forward.data() + plan.forward.size(), "segment 0",
+              [this](int o) { solve_forward(o); }, "forward step");
 }
 
 void GpuTimestep::Impl::adjoint_newmark(int o) {
@@ -148,16 +153,20 @@ void GpuTimestep::Impl::adjoint_extension(int o) {
         "adjoint displacement extension", fmt::format("adjoint extension {}", o));
 }
 
+void GpuTimestep::Impl::solve_adjoint(int o) {
+  if (graph.ops()[o].kind == OpKind::NewmarkSolve)
+    adjoint_newmark(o);
+  else
+    adjoint_extension(o);
+}
+
 void GpuTimestep::Impl::run_adjoint() {
   // The first segment holds the extension setup, whose zero_x argument differs between
   // the first step of a backward pass and the others: one captured graph each.
   segment_prefix = "adjoint segment";
-  launch_plan(plan.adjoint, fresh_backward ? "adjoint segment 0 (fresh)" : "adjoint segment 0", [this](int o) {
-    if (graph.ops()[o].kind == OpKind::NewmarkSolve)
-      adjoint_newmark(o);
-    else
-      adjoint_extension(o);
-  }, "adjoint step");
+  launch_plan(plan.adjoint.data(), plan.adjoint.data() + plan.adjoint.size(),
+              fresh_backward ? "adjoint segment 0 (fresh)" : "adjoint segment 0", [this](int o) { solve_adjoint(o); },
+              "adjoint step");
   fresh_backward = false;
 }
 

@@ -140,8 +140,10 @@ struct GpuTimestep::Impl {
   // cuda_step_drivers.cpp: what a step launches
   Apply newmark_apply();
   Apply extension_apply();
-  void launch_plan(const std::vector<PlannedKernel>& kernels, const std::string& first_segment,
+  void launch_plan(const PlannedKernel* begin, const PlannedKernel* end, const std::string& first_segment,
                    const std::function<void(int)>& solve, const char* what);
+  void solve_forward(int op);
+  void solve_adjoint(int op);
   void newmark_setup(cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x);
   void newmark(int op);
   void extension(int op);

@@ -55,6 +55,18 @@ void Interpreter<Real>::run() {
   for (const OpNode& op : graph_.ops()) execute(op);
 }
 
+template <class Real>
+void Interpreter<Real>::run_op(int op) {
+  const int B = batch();
+  if (int(report_.cg_iterations.size()) != B) {
+    report_.cg_iterations.assign(B, 0);
+    report_.cg_residual.assign(B, 0.0);
+    report_.extension_iterations.assign(B, 0);
+    report_.degenerate_cells.assign(B, 0);
+  }
+  execute(graph_.ops().at(op));
+}
+
 
 template <class Real>
 void Interpreter<Real>::execute(const OpNode& op) {

@@ -45,6 +45,8 @@ class Interpreter {
   // produces a non-finite value (naming the op and batch item).
   void run();
   const RunReport& report() const { return report_; }
+  // One op alone (graph order is the caller's business): for tests of single kernels.
+  void run_op(int op);
 
   // Reverse mode. adjoint() holds one cotangent per tensor, laid out like store().
   // run_adjoint() runs the ops' adjoints in reverse order on the values of the last
@@ -54,6 +56,7 @@ class Interpreter {
   TensorStore<Real>& adjoint() { return adjoint_; }
   void clear_adjoints(bool including_inputs);
   void run_adjoint();
+  void run_op_adjoint(int op);
 
  private:
   // Runs fn(b) for every batch item, items in parallel (each writes only its own slices;

@@ -28,6 +28,11 @@ void Interpreter<Real>::run_adjoint() {
   for (auto it = graph_.ops().rbegin(); it != graph_.ops().rend(); ++it) execute_adjoint(*it);
 }
 
+template <class Real>
+void Interpreter<Real>::run_op_adjoint(int op) {
+  execute_adjoint(graph_.ops().at(op));
+}
+
 namespace {
 
 // Sums per-cell partial values in cell order (deterministic).
@@ -323,6 +328,7 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
 #define SSC_INSTANTIATE_ADJOINT(Real)                             \
   template void Interpreter<Real>::clear_adjoints(bool);          \
   template void Interpreter<Real>::run_adjoint();                 \
+  template void Interpreter<Real>::run_op_adjoint(int);           \
   template void Interpreter<Real>::execute_adjoint(const OpNode&);    \
   template void Interpreter<Real>::execute_adjoint_item(const OpNode&, int);
 SSC_INSTANTIATE_ADJOINT(double)
