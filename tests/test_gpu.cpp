@@ -1,6 +1,7 @@
 // The generated kernels on a GPU against the CPU interpreter (every test here skips
 // without a usable GPU; tools/device-check.sh runs them on the device machine):
 //  - GpuForward: one forward step, double and float, every tensor compared; determinism;
+//    the host-driven solves (grid solves off) too;
 //  - GpuProfile: per-kernel profile and step times of the torus and the teddy-sized body;
 //  - GpuAdjoint: one adjoint step from random cotangents (every input and state
 //    cotangent compared), determinism, and a whole trajectory's gradient per parameter
@@ -33,7 +34,7 @@ double relative_difference(const std::vector<double>& x, const std::vector<doubl
   return norm > 0 ? diff / norm : diff;
 }
 
-void gpu_vs_interpreter(const std::string& real, double tolerance) {
+void gpu_vs_interpreter(const std::string& real, double tolerance, bool grid_solves = true) {
   const Scene scene = torus_scene();
   const SimGrid grid = build_body_grid(scene);
   Simulation sim(scene, grid, 2, true);
@@ -47,6 +48,7 @@ void gpu_vs_interpreter(const std::string& real, double tolerance) {
   SolverOptions so = cpu.options();
   GpuOptions go;
   go.real = real;
+  go.grid_solves = grid_solves;
   GpuTimestep gpu(cpu.graph(), grid, 2, so, go);
   gpu.upload(before);
   gpu.run();
@@ -93,6 +95,13 @@ TEST(GpuForward, FloatMatchesInterpreter) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
   gpu_vs_interpreter("float", 1e-4);
+}
+
+// The host-driven solves (used when a batch does not fit on the GPU at once).
+TEST(GpuForward, HostDrivenSolvesMatchInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  gpu_vs_interpreter("double", 1e-10, false);
 }
 
 TEST(GpuForward, ReportsMissingGpuCleanly) {
