@@ -178,6 +178,29 @@ std::string grid_start_residual(const std::string& own, const std::string& q_of_
          "gen::grid_sync(bar);\n";
 }
 
+// The start's second half, after u = M^-1 r is complete: w = A u at the thread's own
+// nodes (`w_of_u` defines un and wn at node n), stored in w; gamma = r.u, delta = w.u and
+// |r|^2 into acc, summed with the first half's |b|^2 (bb) in one grid_sum.
+std::string grid_start_sums(const std::string& own, const std::string& w_of_u, const std::string& r,
+                            const std::string& w) {
+  return "double acc[3] = {0, 0, 0};\n" + own + " {\n" + w_of_u +
+         "  const Vec3<Real> rn = load3(" + r + ", n);\n"
+         "  store3(" + w + ", n, wn);\n"
+         "  for (int k = 0; k < 3; ++k) {\n"
+         "    acc[0] += double(rn[k]) * double(un[k]);\n"
+         "    acc[1] += double(wn[k]) * double(un[k]);\n"
+         "    acc[2] += double(rn[k]) * double(rn[k]);\n"
+         "  }\n"
+         "}\n"
+         "{\n"
+         "  double sums[4] = {acc[0], acc[1], acc[2], bb};\n"
+         "  gen::grid_sum<4>(sums, parity ? partial1 : partial0, bar);\n"
+         "  parity ^= 1;\n"
+         "  for (int k = 0; k < 3; ++k) acc[k] = sums[k];\n"
+         "  bb = sums[3];\n"
+         "}\n";
+}
+
 // The own-node update of one iteration: s, p, x, r, u, and w = A u at node n from `w_of_u`
 // (given u); the sums gamma, delta, |r|^2 into acc.
 std::string grid_own_update(const std::string& r, const std::string& w, const std::string& s,
@@ -305,23 +328,8 @@ Snippet newmark_grid_loop(const Graph& g, int op) {
       "};\n"
       "cells(kX);\n" +
       grid_start_residual(own, "  const Vec3<Real> q = node_apply(n, load3(v_x, n));\n", "v_r", "v_s") +
-      "cells(kU);\n"
-      "double acc[3] = {0, 0, 0};\n" + own + " {\n"
-      "  const Vec3<Real> un = load3(v_z, n), rn = load3(v_r, n), wn = node_apply(n, un);\n"
-      "  store3(v_w, n, wn);\n"
-      "  for (int k = 0; k < 3; ++k) {\n"
-      "    acc[0] += double(rn[k]) * double(un[k]);\n"
-      "    acc[1] += double(wn[k]) * double(un[k]);\n"
-      "    acc[2] += double(rn[k]) * double(rn[k]);\n"
-      "  }\n"
-      "}\n"
-      "{\n"
-      "  double sums[4] = {acc[0], acc[1], acc[2], bb};\n"
-      "  gen::grid_sum<4>(sums, parity ? partial1 : partial0, bar);\n"
-      "  parity ^= 1;\n"
-      "  for (int k = 0; k < 3; ++k) acc[k] = sums[k];\n"
-      "  bb = sums[3];\n"
-      "}\n" +
+      "cells(kU);\n" +
+      grid_start_sums(own, "  const Vec3<Real> un = load3(v_z, n), wn = node_apply(n, un);\n", "v_r", "v_w") +
       grid_loop(own, "  cells(kNextU);\n  " + own + " {\n" +
                          grid_own_update("v_r", "v_w", "v_s", "v_r", "v_w", "v_s",
                                          "    const Vec3<Real> wn = node_apply(n, un);\n") +
@@ -364,23 +372,7 @@ Snippet extension_grid_loop(const Graph& g, int op) {
                           "  Vec3<Real> xn;\n"
                           "  const Vec3<Real> q = laplacian(n, kX, xn);\n",
                           "r_now", "s_now") +
-      "double acc[3] = {0, 0, 0};\n" + own + " {\n"
-      "  Vec3<Real> un;\n"
-      "  const Vec3<Real> wn = laplacian(n, kU, un), rn = load3(r_now, n);\n"
-      "  store3(w_now, n, wn);\n"
-      "  for (int k = 0; k < 3; ++k) {\n"
-      "    acc[0] += double(rn[k]) * double(un[k]);\n"
-      "    acc[1] += double(wn[k]) * double(un[k]);\n"
-      "    acc[2] += double(rn[k]) * double(rn[k]);\n"
-      "  }\n"
-      "}\n"
-      "{\n"
-      "  double sums[4] = {acc[0], acc[1], acc[2], bb};\n"
-      "  gen::grid_sum<4>(sums, parity ? partial1 : partial0, bar);\n"
-      "  parity ^= 1;\n"
-      "  for (int k = 0; k < 3; ++k) acc[k] = sums[k];\n"
-      "  bb = sums[3];\n"
-      "}\n" +
+      grid_start_sums(own, "  Vec3<Real> un;\n  const Vec3<Real> wn = laplacian(n, kU, un);\n", "r_now", "w_now") +
       grid_loop(own, "  " + own + " {\n"
                          "    Vec3<Real> u_own;\n"
                          "    const Vec3<Real> wn = laplacian(n, kNextU, u_own);\n" +
