@@ -41,6 +41,17 @@ namespace {
 
 using namespace snippet;
 
+// A contact test point: the ground planes, its edge nodes, its position and velocity
+// interpolated along the edge (forward and adjoint of ContactForce share it).
+const char* const kContactPoint =
+    "ops::GroundPlane<Real> planes[ops::kMaxGroundPlanes];\n"
+    "const int plane_count = gen::load_planes($ground_planes, n_plane, planes);\n"
+    "const int na = g_point_nodes[2 * i], nb = g_point_nodes[2 * i + 1];\n"
+    "const Real t = g_point_t[i];\n"
+    "const Vec3<Real> xa = load3(g_node_rest, na), xb = load3(g_node_rest, nb);\n"
+    "const Vec3<Real> x = (Real(1) - t) * (xa + load3($u_prev, na)) + t * (xb + load3($u_prev, nb));\n"
+    "const Vec3<Real> vel = (Real(1) - t) * load3($v_prev, na) + t * load3($v_prev, nb);\n";
+
 std::string opname(int op) { return "op" + std::to_string(op); }
 
 }  // namespace
@@ -79,13 +90,7 @@ Snippet forward_snippet(const Graph& g, int op) {
       return Builder(g, op, "contact_force", Extent::Point)
           .t("u_prev", false, true).t("v_prev", false, true).t("ground_planes").t("dt").t("theta").t("point_force", true)
           .grid("point_nodes", "int").grid("point_t", "Real").grid("point_area", "Real").grid("node_rest", "Real", true)
-          .code("ops::GroundPlane<Real> planes[ops::kMaxGroundPlanes];\n"
-                "const int plane_count = gen::load_planes($ground_planes, n_plane, planes);\n"
-                "const int na = g_point_nodes[2 * i], nb = g_point_nodes[2 * i + 1];\n"
-                "const Real t = g_point_t[i];\n"
-                "const Vec3<Real> xa = load3(g_node_rest, na), xb = load3(g_node_rest, nb);\n"
-                "const Vec3<Real> x = (Real(1) - t) * (xa + load3($u_prev, na)) + t * (xb + load3($u_prev, nb));\n"
-                "const Vec3<Real> vel = (Real(1) - t) * load3($v_prev, na) + t * load3($v_prev, nb);\n"
+          .code(std::string(kContactPoint) +
                 "store3($point_force, i, ops::contact_force(x, vel, g_point_area[i], planes, plane_count, $dt[0], $theta[0]));\n");
     case OpKind::NodeForce: {
       Builder b(g, op, "node_force", Extent::Node);
@@ -202,13 +207,7 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
                       .scratch("xbar", "xbar_" + n, "Real", Domain::Point, 3, true)
                       .scratch("vbar", "vbar_" + n, "Real", Domain::Point, 3, true)
                       .scratch("pbar", "planebar_" + n, "Real", Domain::Point, kMaxPlaneBars, true)
-                      .code("ops::GroundPlane<Real> planes[ops::kMaxGroundPlanes];\n"
-                            "const int plane_count = gen::load_planes($ground_planes, n_plane, planes);\n"
-                            "const int na = g_point_nodes[2 * i], nb = g_point_nodes[2 * i + 1];\n"
-                            "const Real t = g_point_t[i];\n"
-                            "const Vec3<Real> xa = load3(g_node_rest, na), xb = load3(g_node_rest, nb);\n"
-                            "const Vec3<Real> x = (Real(1) - t) * (xa + load3($u_prev, na)) + t * (xb + load3($u_prev, nb));\n"
-                            "const Vec3<Real> vel = (Real(1) - t) * load3($v_prev, na) + t * load3($v_prev, nb);\n"
+                      .code(std::string(kContactPoint) +
                             "Vec3<Real> xb_ = zero3<Real>(), vb_ = zero3<Real>();\n"
                             "Vec3<Real> nbar[ops::kMaxGroundPlanes];\n"
                             "Real hbar[ops::kMaxGroundPlanes];\n"
