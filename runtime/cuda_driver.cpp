@@ -45,7 +45,8 @@ Loaded load() {
                    bind(lib, d.ModuleGetFunction, "cuModuleGetFunction", w) &&
                    bind(lib, d.FuncGetAttribute, "cuFuncGetAttribute", w) && bind(lib, d.MemAlloc, "cuMemAlloc_v2", w) &&
                    bind(lib, d.MemFree, "cuMemFree_v2", w) && bind(lib, d.MemcpyHtoD, "cuMemcpyHtoD_v2", w) &&
-                   bind(lib, d.MemcpyDtoH, "cuMemcpyDtoH_v2", w) && bind(lib, d.MemsetD8, "cuMemsetD8_v2", w) &&
+                   bind(lib, d.MemcpyDtoH, "cuMemcpyDtoH_v2", w) &&
+                   bind(lib, d.MemcpyDtoD, "cuMemcpyDtoD_v2", w) && bind(lib, d.MemsetD8, "cuMemsetD8_v2", w) &&
                    bind(lib, d.LaunchKernel, "cuLaunchKernel", w) && bind(lib, d.GetErrorString, "cuGetErrorString", w) &&
                    bind(lib, d.DriverGetVersion, "cuDriverGetVersion", w);
   if (!all) return l;

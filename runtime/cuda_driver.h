@@ -37,6 +37,7 @@ struct Driver {
   Result (*MemFree)(DevicePtr);
   Result (*MemcpyHtoD)(DevicePtr, const void*, size_t);
   Result (*MemcpyDtoH)(void*, DevicePtr, size_t);
+  Result (*MemcpyDtoD)(DevicePtr, DevicePtr, size_t);
   Result (*MemsetD8)(DevicePtr, unsigned char, size_t);
   Result (*LaunchKernel)(Function, unsigned, unsigned, unsigned, unsigned, unsigned, unsigned, unsigned, Stream,
                          void**, void**);

@@ -54,7 +54,8 @@ GpuTimestep::Impl::~Impl() {
   if (!d) return;
   d->CtxSetCurrent(ctx);
   for (Buffer& x : tensors) d->MemFree(x.ptr);
-  for (Buffer& x : adjoints) d->MemFree(x.ptr);
+  for (Buffer* x : {&adjoint_arena, &saved_adjoints})
+    if (x->ptr) d->MemFree(x->ptr);
   for (auto& [n, x] : grid_buffers) d->MemFree(x.ptr);
   for (auto& [n, x] : scratch) d->MemFree(x.ptr);
   for (auto& [n, e] : graph_execs) d->GraphExecDestroy(e);
@@ -248,6 +249,14 @@ void GpuTimestep::Impl::decide_grid_solves() {
     fits &= per_sm * multiprocessors >= batch;
   }
   grid_solves = fits && !grid_capacity.empty();
+  if (!grid_solves) return;
+  int phases = options.extension_phases;
+  if (const char* e = std::getenv("SSC_GPU_EXTENSION_PHASES")) phases = std::atoi(e);
+  // Measured on an H200: two phases pay from about two band nodes per thread (batch 32:
+  // 20-30% faster), one phase is faster up to about one (batch 1: 15-25%; batch 8: up to 10%).
+  if (phases != 1 && phases != 2)
+    phases = 2L * grid_blocks(kernel("extension_pcg_grid"), sizes.band) * kGridBlock <= sizes.band ? 2 : 1;
+  extension_grid = phases == 2 ? "extension_pcg_grid_two_phase" : "extension_pcg_grid";
 }
 
 // Blocks per batch item for a grid kernel over `work` threads' worth of nodes or cells:
@@ -267,8 +276,24 @@ void GpuTimestep::Impl::ensure_adjoint() {
   for (const PlannedKernel& k : plan.adjoint) adjoint.push_back(&k);
   compile_and_load(adjoint);
   allocate_scratch(plan.adjoint);
-  for (const TensorInfo& t : graph.tensors())
-    adjoints.push_back(alloc(size_t(batch) * count(t.domain) * t.components * real_size));
+  // Inputs first, each view 256-byte aligned.
+  const size_t n = graph.tensors().size();
+  std::vector<size_t> offset(n);
+  size_t end = 0;
+  for (bool inputs : {true, false}) {
+    for (size_t t = 0; t < n; ++t) {
+      const TensorInfo& info = graph.tensor(int(t));
+      if ((info.role == TensorInfo::Role::Input) != inputs) continue;
+      offset[t] = end;
+      end += (size_t(batch) * count(info.domain) * info.components * real_size + 255) / 256 * 256;
+    }
+    if (inputs) adjoint_input_bytes = end;
+  }
+  adjoint_arena = alloc(end);
+  for (size_t t = 0; t < n; ++t) {
+    const TensorInfo& info = graph.tensor(int(t));
+    adjoints.push_back({adjoint_arena.ptr + offset[t], size_t(batch) * count(info.domain) * info.components * real_size});
+  }
   adjoint_cg_iterations.assign(batch, 0);
   adjoint_ready = true;
 }
@@ -599,9 +624,25 @@ void GpuTimestep::clear_adjoints(bool including_inputs) {
   cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
   m.ensure_adjoint();
   if (including_inputs) m.fresh_backward = true;
-  for (size_t t = 0; t < m.graph.tensors().size(); ++t)
-    if (including_inputs || m.graph.tensor(int(t)).role != TensorInfo::Role::Input)
-      cu::check(m.d->MemsetD8(m.adjoints[t].ptr, 0, m.adjoints[t].bytes), "clear cotangents");
+  const size_t skip = including_inputs ? 0 : m.adjoint_input_bytes;
+  if (m.adjoint_arena.bytes > skip)
+    cu::check(m.d->MemsetD8(m.adjoint_arena.ptr + skip, 0, m.adjoint_arena.bytes - skip), "clear cotangents");
+}
+
+void GpuTimestep::save_adjoints() {
+  Impl& m = *impl_;
+  cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
+  m.ensure_adjoint();
+  if (!m.saved_adjoints.ptr) m.saved_adjoints = m.alloc(m.adjoint_arena.bytes);
+  cu::check(m.d->MemcpyDtoD(m.saved_adjoints.ptr, m.adjoint_arena.ptr, m.adjoint_arena.bytes), "save cotangents");
+}
+
+void GpuTimestep::restore_adjoints() {
+  Impl& m = *impl_;
+  if (!m.saved_adjoints.ptr) throw std::logic_error("gpu: restore_adjoints before save_adjoints");
+  cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
+  cu::check(m.d->MemcpyDtoD(m.adjoint_arena.ptr, m.saved_adjoints.ptr, m.adjoint_arena.bytes), "restore cotangents");
+  m.fresh_backward = true;
 }
 
 void GpuTimestep::set_adjoint(int tensor, const std::vector<double>& all_items) {

@@ -56,6 +56,11 @@ struct GpuOptions {
   // per-iteration kernels with host checks every check_every iterations
   // (SSC_GPU_GRID_SOLVES=0 turns it off).
   bool grid_solves = true;
+  // The extension's grid solve: 1 phase per iteration (u evaluated at the neighbours; fewer
+  // barriers, for latency), 2 phases (u read from the stored residual; less memory
+  // traffic, for throughput), or 0: 2 where a thread owns two or more band nodes, i.e. for
+  // large batches (SSC_GPU_EXTENSION_PHASES=1 or 2 overrides).
+  int extension_phases = 0;
 };
 
 struct GpuKernelTiming {
@@ -91,6 +96,10 @@ class GpuTimestep {
   void clear_adjoints(bool including_inputs);
   void set_adjoint(int tensor, const std::vector<double>& all_items);
   void get_adjoint(int tensor, std::vector<double>& all_items) const;
+  // A copy of every cotangent on the device, and its restoration as the start of a
+  // backward pass (a repeated adjoint step from the same seeds without uploads).
+  void save_adjoints();
+  void restore_adjoints();
   // One adjoint step; throws SimulationError if an adjoint solve does not converge.
   void run_adjoint();
   // Kernels [first, last] of the forward (adjoint) plan alone, on what the device holds;

@@ -4,7 +4,7 @@
 // Forward: newmark_init, diag, setup, then PCG with the element apply (cell kernel,
 // node gather) on u; the extension: setup (rhs from the active neighbours, the guess),
 // PCG with the band Laplacian on band_u. Each PCG is one persistent grid kernel
-// (newmark_pcg_grid, extension_pcg_grid) when grid solves are on, whose outcomes the host
+// (newmark_pcg_grid; extension_pcg_grid or its two-phase form for large batches) when grid solves are on, whose outcomes the host
 // reads after the step; else the host-driven iteration kernels.
 // Adjoint (implicit-function adjoints, as runtime/interpreter_adjoint.cpp): the
 // extension's cotangent solve L y = band_u_bar into scratch y (warm-started from the
@@ -81,7 +81,7 @@ void GpuTimestep::Impl::extension(int o) {
   setup.vectors = {{"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
   launch(kernel("extension_setup"), setup);
   if (grid_solves)
-    grid_pcg(kernel("extension_pcg_grid"), x, sizes.band, solver.extension_tolerance, solver.extension_max_iterations,
+    grid_pcg(kernel(extension_grid), x, sizes.band, solver.extension_tolerance, solver.extension_max_iterations,
              scratch.at("v_iterations_sink").ptr, "displacement extension", nullptr);
   else
     pcg(x, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, extension_apply(),
@@ -146,7 +146,7 @@ void GpuTimestep::Impl::adjoint_extension(int o) {
   setup.values = {{"zero_x", fresh_backward ? 1 : 0}};
   launch(kernel("extension_adj_setup", true), setup);
   if (grid_solves)
-    grid_pcg(kernel("extension_pcg_grid"), y, sizes.band, solver.extension_tolerance, solver.extension_max_iterations,
+    grid_pcg(kernel(extension_grid), y, sizes.band, solver.extension_tolerance, solver.extension_max_iterations,
              scratch.at("v_iterations_sink").ptr, "adjoint displacement extension", nullptr);
   else
     pcg(y, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, extension_apply(),

@@ -73,7 +73,11 @@ struct GpuTimestep::Impl {
   std::map<std::string, cu::Function> functions;
   std::map<std::string, int> registers;
   std::vector<Buffer> tensors;
-  std::vector<Buffer> adjoints;  // cotangent per tensor; allocated with the adjoint kernels
+  // Cotangents, allocated with the adjoint kernels: one arena, the inputs' first (so each
+  // clear is one memset), a view per tensor; the copy kept by save_adjoints.
+  Buffer adjoint_arena, saved_adjoints;
+  size_t adjoint_input_bytes = 0;
+  std::vector<Buffer> adjoints;
   std::map<std::string, Buffer> grid_buffers, scratch;
   std::vector<int> cg_iterations, adjoint_cg_iterations;
   bool adjoint_ready = false;
@@ -102,6 +106,7 @@ struct GpuTimestep::Impl {
   bool grid_solves = false;
   int multiprocessors = 0;
   std::map<std::string, int> grid_capacity;  // per grid kernel: resident blocks on the device
+  std::string extension_grid;                 // the extension's grid kernel (GpuOptions::extension_phases)
   std::vector<SolveCheck> solve_checks;       // this step's grid solves, read after it
 
   Impl(const Graph& g, const SimGrid& gr, int b, const SolverOptions& s, const GpuOptions& o)

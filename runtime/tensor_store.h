@@ -32,6 +32,7 @@ class TensorStore {
     }
   }
   int batch() const { return batch_; }
+  int tensor_count() const { return int(data_.size()); }
   size_t stride(int tensor) const { return strides_[tensor]; }
   Real* data(int tensor, int b) { return data_[tensor].data() + strides_[tensor] * b; }
   const Real* data(int tensor, int b) const { return data_[tensor].data() + strides_[tensor] * b; }

@@ -34,7 +34,8 @@ double relative_difference(const std::vector<double>& x, const std::vector<doubl
   return norm > 0 ? diff / norm : diff;
 }
 
-void gpu_vs_interpreter(const std::string& real, double tolerance, bool grid_solves = true) {
+// Returns the GPU's step outputs.
+TensorStore<double> gpu_vs_interpreter(const std::string& real, double tolerance, GpuOptions go = {}) {
   const Scene scene = torus_scene();
   const SimGrid grid = build_body_grid(scene);
   Simulation sim(scene, grid, 2, true);
@@ -46,9 +47,7 @@ void gpu_vs_interpreter(const std::string& real, double tolerance, bool grid_sol
   Interpreter<double>& cpu = sim.interpreter();
   TensorStore<double> before = cpu.store();
   SolverOptions so = cpu.options();
-  GpuOptions go;
   go.real = real;
-  go.grid_solves = grid_solves;
   GpuTimestep gpu(cpu.graph(), grid, 2, so, go);
   gpu.upload(before);
   gpu.run();
@@ -83,6 +82,7 @@ void gpu_vs_interpreter(const std::string& real, double tolerance, bool grid_sol
   gpu.download(again);
   for (size_t t = 0; t < cpu.graph().tensors().size(); ++t)
     EXPECT_TRUE(again.all(int(t)) == got.all(int(t))) << cpu.graph().tensor(int(t)).name;
+  return got;
 }
 
 TEST(GpuForward, DoubleMatchesInterpreter) {
@@ -101,7 +101,9 @@ TEST(GpuForward, FloatMatchesInterpreter) {
 TEST(GpuForward, HostDrivenSolvesMatchInterpreter) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
-  gpu_vs_interpreter("double", 1e-10, false);
+  GpuOptions go;
+  go.grid_solves = false;
+  gpu_vs_interpreter("double", 1e-10, go);
 }
 
 TEST(GpuForward, ReportsMissingGpuCleanly) {
@@ -170,27 +172,33 @@ TEST(GpuProfile, TorusAndTeddySteps) {
       print_timings(gpu, real, body);
     }
   }
-  // A batch of 32 teddy-sized simulations (the perturbed starts of a reconstruction).
-  const Scene scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/teddy-sized.json");
-  const SimGrid grid = build_body_grid(scene);
-  Simulation sim(scene, grid, 32, true);
-  for (int s = 0; s < 2; ++s) sim.step();
-  const TimestepGraph& tg = sim.timestep_graph();
-  TensorStore<double>& store = sim.interpreter().store();
-  GpuOptions go;
-  go.profile = true;
-  GpuTimestep gpu(tg.graph, grid, 32, sim.interpreter().options(), go);
-  gpu.upload(store);
-  gpu.run();
-  gpu.clear_adjoints(true);
-  for (int t : {tg.u, tg.v, tg.band_u}) gpu.set_adjoint(t, store.all(t));
-  gpu.run_adjoint();
-  print_timings(gpu, "double", "teddy x32");
+  // A batch of 32 simulations (the perturbed starts of a reconstruction): the teddy-sized
+  // body and the dragon (whole grid as band, as in the benchmarks).
+  for (const char* body : {"teddy-sized", "dragon"}) {
+    const std::string path = std::string(SSC_SOURCE_DIR) + "/examples/" + body + ".json";
+    const Scene scene = std::string(body) == "dragon" ? load_scene(path, {"grid.band_width=0"}) : load_scene(path);
+    const SimGrid grid = build_body_grid(scene);
+    Simulation sim(scene, grid, 32, true);
+    for (int s = 0; s < 2; ++s) sim.step();
+    const TimestepGraph& tg = sim.timestep_graph();
+    TensorStore<double>& store = sim.interpreter().store();
+    GpuOptions go;
+    go.profile = true;
+    GpuTimestep gpu(tg.graph, grid, 32, sim.interpreter().options(), go);
+    gpu.upload(store);
+    gpu.run();
+    gpu.clear_adjoints(true);
+    for (int t : {tg.u, tg.v, tg.band_u}) gpu.set_adjoint(t, store.all(t));
+    gpu.run_adjoint();
+    print_timings(gpu, "double", (std::string(body) + " x32").c_str());
+  }
 }
 
 // ---- adjoint ----
 
-void adjoint_vs_interpreter(const std::string& real, double tolerance) {
+// Returns the GPU's cotangents of the inputs and states (empty for intermediates).
+std::vector<std::vector<double>> adjoint_vs_interpreter(const std::string& real, double tolerance,
+                                                        GpuOptions go = {}) {
   const Scene scene = torus_scene();
   const SimGrid grid = build_body_grid(scene);
   Simulation sim(scene, grid, 2, true);
@@ -201,7 +209,6 @@ void adjoint_vs_interpreter(const std::string& real, double tolerance) {
   for (int s = 0; s < 4; ++s) sim.step();
   const TimestepGraph& tg = sim.timestep_graph();
   Interpreter<double>& cpu = sim.interpreter();
-  GpuOptions go;
   go.real = real;
   GpuTimestep gpu(cpu.graph(), grid, 2, cpu.options(), go);
   gpu.upload(cpu.store());
@@ -221,6 +228,7 @@ void adjoint_vs_interpreter(const std::string& real, double tolerance) {
     }
   };
   seed_both();
+  gpu.save_adjoints();
   cpu.run_adjoint();
   gpu.run_adjoint();
   std::string which, all;
@@ -239,8 +247,9 @@ void adjoint_vs_interpreter(const std::string& real, double tolerance) {
   std::printf("[ %s ] worst %.3g (%s); adjoint CG iterations GPU %d/%d\n", real.c_str(), worst, which.c_str(),
               gpu.adjoint_cg_iterations()[0], gpu.adjoint_cg_iterations()[1]);
   EXPECT_LT(worst, tolerance) << which;
-  // Determinism: the same seeds give bitwise the same cotangents.
-  seed_both();
+  // Determinism: the same seeds (restored on the device, a fresh backward pass) give
+  // bitwise the same cotangents.
+  gpu.restore_adjoints();
   gpu.run_adjoint();
   for (size_t t = 0; t < first.size(); ++t) {
     if (first[t].empty()) continue;
@@ -248,6 +257,7 @@ void adjoint_vs_interpreter(const std::string& real, double tolerance) {
     gpu.get_adjoint(int(t), again);
     EXPECT_TRUE(again == first[t]) << cpu.graph().tensor(int(t)).name;
   }
+  return first;
 }
 
 TEST(GpuAdjoint, DoubleStepMatchesInterpreter) {
@@ -260,6 +270,20 @@ TEST(GpuAdjoint, FloatStepMatchesInterpreter) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
   adjoint_vs_interpreter("float", 1e-3);
+}
+
+// The extension's two grid solves (one phase per iteration for latency, two for
+// throughput) evaluate the same expressions: the same bits, forward and adjoint.
+TEST(GpuExtension, OneAndTwoPhaseGridSolvesGiveTheSameBits) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  GpuOptions one, two;
+  one.extension_phases = 1;
+  two.extension_phases = 2;
+  const TensorStore<double> a = gpu_vs_interpreter("double", 1e-10, one), b = gpu_vs_interpreter("double", 1e-10, two);
+  for (int t = 0; t < a.tensor_count(); ++t) EXPECT_TRUE(a.all(t) == b.all(t)) << "tensor " << t;
+  const auto da = adjoint_vs_interpreter("double", 1e-10, one), db = adjoint_vs_interpreter("double", 1e-10, two);
+  for (size_t t = 0; t < da.size(); ++t) EXPECT_TRUE(da[t] == db[t]) << "cotangent " << t;
 }
 
 // A whole trajectory (12 steps, frames at 4, 8 and 12, contact, checkpointing every 5

@@ -254,7 +254,9 @@ TEST(GpuKernels, GroupsCoverThePlanOnce) {
     EXPECT_EQ(groups.back().last, int(list->size()) - 1);
     std::set<int> ops;
     for (size_t i = 0; i < groups.size(); ++i) {
-      if (i > 0) EXPECT_EQ(groups[i].first, groups[i - 1].last + 1);
+      if (i > 0) {
+        EXPECT_EQ(groups[i].first, groups[i - 1].last + 1);
+      }
       for (int o : groups[i].ops) EXPECT_TRUE(ops.insert(o).second) << "op " << o << " in two groups";
     }
     EXPECT_EQ(ops.size(), sim.interpreter().graph().ops().size());
