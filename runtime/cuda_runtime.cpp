@@ -54,7 +54,7 @@ GpuTimestep::Impl::~Impl() {
   if (!d) return;
   d->CtxSetCurrent(ctx);
   for (Buffer& x : tensors) d->MemFree(x.ptr);
-  for (Buffer* x : {&adjoint_arena, &saved_adjoints})
+  for (Buffer* x : {&adjoint_arena, &saved_adjoints, &chain_staging})
     if (x->ptr) d->MemFree(x->ptr);
   for (auto& [n, x] : grid_buffers) d->MemFree(x.ptr);
   for (auto& [n, x] : scratch) d->MemFree(x.ptr);
@@ -85,6 +85,28 @@ std::vector<char> GpuTimestep::Impl::to_real(const double* v, size_t n) const {
     }
   }
   return out;
+}
+
+// Host doubles to device Real and back; doubles travel without a staging copy.
+void GpuTimestep::Impl::put(cu::DevicePtr dst, const double* v, size_t n, const char* what) {
+  if (n == 0) return;
+  if (real_size == 8) {
+    cu::check(d->MemcpyHtoD(dst, v, n * 8), what);
+    return;
+  }
+  const std::vector<char> bytes = to_real(v, n);
+  cu::check(d->MemcpyHtoD(dst, bytes.data(), bytes.size()), what);
+}
+
+void GpuTimestep::Impl::get(double* v, cu::DevicePtr src, size_t n, const char* what) const {
+  if (n == 0) return;
+  if (real_size == 8) {
+    cu::check(d->MemcpyDtoH(v, src, n * 8), what);
+    return;
+  }
+  std::vector<char> bytes(n * real_size);
+  cu::check(d->MemcpyDtoH(bytes.data(), src, bytes.size()), what);
+  from_real(bytes, v, n);
 }
 
 void GpuTimestep::Impl::from_real(const std::vector<char>& bytes, double* v, size_t n) const {
@@ -599,8 +621,17 @@ void GpuTimestep::upload(const TensorStore<double>& store, bool intermediates) {
   for (size_t t = 0; t < m.graph.tensors().size(); ++t) {
     if (!intermediates && m.graph.tensor(int(t)).role == TensorInfo::Role::Intermediate) continue;
     const std::vector<double>& v = store.all(int(t));
-    const std::vector<char> bytes = m.to_real(v.data(), v.size());
-    if (!bytes.empty()) cu::check(m.d->MemcpyHtoD(m.tensors[t].ptr, bytes.data(), bytes.size()), "upload tensor");
+    m.put(m.tensors[t].ptr, v.data(), v.size(), "upload tensor");
+  }
+}
+
+void GpuTimestep::copy_tensors(const std::vector<std::pair<int, int>>& from_to) {
+  Impl& m = *impl_;
+  cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
+  for (const auto& [from, to] : from_to) {
+    const Impl::Buffer &a = m.tensors.at(from), &b = m.tensors.at(to);
+    if (a.bytes != b.bytes) throw std::logic_error("gpu: copy_tensors between tensors of different sizes");
+    cu::check(m.d->MemcpyDtoD(b.ptr, a.ptr, a.bytes), "copy tensor");
   }
 }
 
@@ -613,10 +644,7 @@ void GpuTimestep::download(TensorStore<double>& store) const {
 void GpuTimestep::download(TensorStore<double>& store, int tensor) const {
   const Impl& m = *impl_;
   std::vector<double>& v = store.all(tensor);
-  std::vector<char> bytes(v.size() * m.real_size);
-  if (bytes.empty()) return;
-  cu::check(m.d->MemcpyDtoH(bytes.data(), m.tensors.at(tensor).ptr, bytes.size()), "download tensor");
-  m.from_real(bytes, v.data(), v.size());
+  m.get(v.data(), m.tensors.at(tensor).ptr, v.size(), "download tensor");
 }
 
 void GpuTimestep::clear_adjoints(bool including_inputs) {
@@ -648,18 +676,44 @@ void GpuTimestep::restore_adjoints() {
 void GpuTimestep::set_adjoint(int tensor, const std::vector<double>& all_items) {
   Impl& m = *impl_;
   m.ensure_adjoint();
-  const std::vector<char> bytes = m.to_real(all_items.data(), all_items.size());
-  if (bytes.size() > m.adjoints.at(tensor).bytes) throw std::logic_error("gpu: set_adjoint size mismatch");
-  if (!bytes.empty()) cu::check(m.d->MemcpyHtoD(m.adjoints[tensor].ptr, bytes.data(), bytes.size()), "upload cotangent");
+  if (all_items.size() * m.real_size > m.adjoints.at(tensor).bytes) throw std::logic_error("gpu: set_adjoint size mismatch");
+  m.put(m.adjoints[tensor].ptr, all_items.data(), all_items.size(), "upload cotangent");
 }
 
 void GpuTimestep::get_adjoint(int tensor, std::vector<double>& all_items) const {
   const Impl& m = *impl_;
   if (!m.adjoint_ready) throw std::logic_error("gpu: get_adjoint before any adjoint step");
-  std::vector<char> bytes(all_items.size() * m.real_size);
-  if (bytes.empty()) return;
-  cu::check(m.d->MemcpyDtoH(bytes.data(), m.adjoints.at(tensor).ptr, bytes.size()), "download cotangent");
-  m.from_real(bytes, all_items.data(), all_items.size());
+  if (all_items.size() * m.real_size > m.adjoints.at(tensor).bytes) throw std::logic_error("gpu: get_adjoint size mismatch");
+  m.get(all_items.data(), m.adjoints.at(tensor).ptr, all_items.size(), "download cotangent");
+}
+
+void GpuTimestep::chain_adjoints(const std::vector<std::pair<int, int>>& from_to) {
+  Impl& m = *impl_;
+  cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
+  m.ensure_adjoint();
+  size_t bytes = 0;
+  for (const auto& [from, to] : from_to) {
+    if (m.adjoints.at(from).bytes != m.adjoints.at(to).bytes)
+      throw std::logic_error("gpu: chain_adjoints between tensors of different sizes");
+    if (m.graph.tensor(to).role == TensorInfo::Role::Input)
+      throw std::logic_error("gpu: chain_adjoints into an input's cotangent");
+    bytes += m.adjoints[from].bytes;
+  }
+  if (m.chain_staging.bytes < bytes) {
+    if (m.chain_staging.ptr) m.d->MemFree(m.chain_staging.ptr);
+    m.chain_staging = m.alloc(bytes);
+  }
+  size_t at = 0;
+  for (const auto& [from, to] : from_to) {
+    cu::check(m.d->MemcpyDtoD(m.chain_staging.ptr + at, m.adjoints[from].ptr, m.adjoints[from].bytes), "chain cotangents");
+    at += m.adjoints[from].bytes;
+  }
+  clear_adjoints(false);
+  at = 0;
+  for (const auto& [from, to] : from_to) {
+    cu::check(m.d->MemcpyDtoD(m.adjoints[to].ptr, m.chain_staging.ptr + at, m.adjoints[to].bytes), "chain cotangents");
+    at += m.adjoints[to].bytes;
+  }
 }
 
 void GpuTimestep::run_adjoint() {

@@ -24,6 +24,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "graph/graph.h"
@@ -87,6 +88,9 @@ class GpuTimestep {
   // Copies every tensor back (converted to double), or one tensor (all batch items).
   void download(TensorStore<double>& store) const;
   void download(TensorStore<double>& store, int tensor) const;
+  // Device copies between tensors of one size (from, to): the step's outputs become the
+  // next step's state without a host round trip.
+  void copy_tensors(const std::vector<std::pair<int, int>>& from_to);
 
   // Adjoint of the step that the last run() computed (the forward values stay on the
   // device). clear_adjoints(true) zeroes every cotangent and starts a backward pass;
@@ -100,6 +104,10 @@ class GpuTimestep {
   // backward pass (a repeated adjoint step from the same seeds without uploads).
   void save_adjoints();
   void restore_adjoints();
+  // The next (earlier) step of a backward pass, on the device: each (from, to) cotangent
+  // moves (the previous state's become the step outputs'), every other non-input
+  // cotangent is cleared.
+  void chain_adjoints(const std::vector<std::pair<int, int>>& from_to);
   // One adjoint step; throws SimulationError if an adjoint solve does not converge.
   void run_adjoint();
   // Kernels [first, last] of the forward (adjoint) plan alone, on what the device holds;

@@ -75,7 +75,7 @@ struct GpuTimestep::Impl {
   std::vector<Buffer> tensors;
   // Cotangents, allocated with the adjoint kernels: one arena, the inputs' first (so each
   // clear is one memset), a view per tensor; the copy kept by save_adjoints.
-  Buffer adjoint_arena, saved_adjoints;
+  Buffer adjoint_arena, saved_adjoints, chain_staging;
   size_t adjoint_input_bytes = 0;
   std::vector<Buffer> adjoints;
   std::map<std::string, Buffer> grid_buffers, scratch;
@@ -121,6 +121,8 @@ struct GpuTimestep::Impl {
   Buffer alloc(size_t bytes);
   std::vector<char> to_real(const double* v, size_t n) const;
   void from_real(const std::vector<char>& bytes, double* v, size_t n) const;
+  void put(cu::DevicePtr dst, const double* v, size_t n, const char* what);
+  void get(double* v, cu::DevicePtr src, size_t n, const char* what) const;
   void upload_real(const std::string& name, const std::vector<double>& v);
   void upload_int(const std::string& name, const std::vector<int>& v);
   void upload_grid();

@@ -89,8 +89,8 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
   if (!options.gradient) return results;
 
   // The backward pass runs where the steps run: the interpreter's adjoint, or the
-  // generated adjoint kernels on the GPU (cotangents stay on the device between steps
-  // except the state's, which pass through the host with the frame seeds).
+  // generated adjoint kernels on the GPU (every cotangent stays on the device between
+  // steps; the host adds the frames' seeds and reads the parameters' at the end).
   Interpreter<double>& in = sim.interpreter();
   TensorStore<double>& adj = in.adjoint();
   GpuTimestep* gpu = sim.gpu();
@@ -115,6 +115,29 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
     }
     for (int b = 0; b < B; ++b) sim.set_state(b, segment[b].at(t - 1), t - 1);
     sim.recompute_step();
+    if (gpu) {
+      // The state's cotangents stay on the device from step to step; the host adds the
+      // frames' seeds where there are any.
+      if (t == steps)
+        gpu->clear_adjoints(false);
+      else
+        gpu->chain_adjoints({{tg.u_prev, tg.u}, {tg.v_prev, tg.v}});
+      if (seeds[0].count(t)) {
+        std::vector<double>& ub = adj.all(tg.u);
+        std::vector<double>& bb = adj.all(tg.band_u);
+        gpu->get_adjoint(tg.u, ub);
+        std::fill(bb.begin(), bb.end(), 0.0);
+        for (int b = 0; b < B; ++b) {
+          const FrameSeed& s = seeds[b].at(t);
+          for (size_t i = 0; i < n3; ++i) ub[b * n3 + i] += s.u_bar[i];
+          std::copy(s.band_bar.begin(), s.band_bar.end(), bb.begin() + b * b3);
+        }
+        gpu->set_adjoint(tg.u, ub);
+        gpu->set_adjoint(tg.band_u, bb);
+      }
+      gpu->run_adjoint();
+      continue;
+    }
     in.clear_adjoints(false);
     for (int b = 0; b < B; ++b) {
       double* ub = adj.data(tg.u, b);
@@ -128,22 +151,18 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
         for (size_t i = 0; i < b3; ++i) bb[i] += it->second.band_bar[i];
       }
     }
-    if (gpu) {
-      gpu->clear_adjoints(false);
-      for (int tensor : {tg.u, tg.v, tg.band_u}) gpu->set_adjoint(tensor, adj.all(tensor));
-      gpu->run_adjoint();
-      for (int tensor : {tg.u_prev, tg.v_prev}) gpu->get_adjoint(tensor, adj.all(tensor));
-    } else {
-      in.run_adjoint();
-    }
+    in.run_adjoint();
     for (int b = 0; b < B; ++b) {
       std::copy_n(adj.data(tg.u_prev, b), n3, u_bar[b].begin());
       std::copy_n(adj.data(tg.v_prev, b), n3, v_bar[b].begin());
     }
   }
-  if (gpu)  // the parameters' cotangents, accumulated on the device over the pass
+  if (gpu && steps > 0) {  // the parameters' cotangents, accumulated on the device over the pass
     for (size_t t = 0; t < tg.graph.tensors().size(); ++t)
       if (tg.graph.tensor(int(t)).role == TensorInfo::Role::Input) gpu->get_adjoint(int(t), adj.all(int(t)));
+    gpu->get_adjoint(tg.v_prev, adj.all(tg.v_prev));  // the initial state's
+    for (int b = 0; b < B; ++b) std::copy_n(adj.data(tg.v_prev, b), n3, v_bar[b].begin());
+  }
 
   for (int b = 0; b < B; ++b) {
     ParameterGradient& pg = results[b].gradient;

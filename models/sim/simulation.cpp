@@ -53,6 +53,7 @@ void Simulation::use_gpu(const std::string& real) {
   GpuOptions options;
   options.real = real;
   gpu_ = std::make_unique<GpuTimestep>(graph_.graph, grid_, batch(), interpreter_->options(), options);
+  device_current_ = false;
 }
 
 int Simulation::last_cg_iterations(int b) const {
@@ -97,6 +98,7 @@ double Simulation::total_mass() const {
 }
 
 void Simulation::reset() {
+  device_current_ = false;
   TensorStore<double>& st = interpreter_->store();
   for (int b = 0; b < batch(); ++b) {
     write_inputs(b);
@@ -147,10 +149,15 @@ void Simulation::step() {
   TensorStore<double>& st = interpreter_->store();
   try {
     if (gpu_) {
-      gpu_->upload(st);
+      if (!device_current_) gpu_->upload(st);
+      device_current_ = false;
       gpu_->run();
       for (int t : {graph_.u, graph_.v, graph_.band_u, graph_.cg_iterations})
         if (t >= 0) gpu_->download(st, t);
+      std::vector<std::pair<int, int>> advance = {{graph_.u, graph_.u_prev}, {graph_.v, graph_.v_prev}};
+      if (graph_.band_u >= 0) advance.push_back({graph_.band_u, graph_.band_guess});
+      gpu_->copy_tensors(advance);
+      device_current_ = true;
     } else {
       interpreter_->run();
     }
@@ -168,7 +175,8 @@ void Simulation::step() {
 
 void Simulation::recompute_step() {
   if (gpu_) {
-    gpu_->upload(interpreter_->store());
+    if (!device_current_) gpu_->upload(interpreter_->store());
+    device_current_ = true;
     gpu_->run();
   } else {
     interpreter_->run();
@@ -185,6 +193,7 @@ Simulation::State Simulation::state(int b) const {
 }
 
 void Simulation::set_state(int b, const State& s, int step) {
+  device_current_ = false;
   TensorStore<double>& st = interpreter_->store();
   std::copy(s.u.begin(), s.u.end(), st.data(graph_.u_prev, b));
   std::copy(s.v.begin(), s.v.end(), st.data(graph_.v_prev, b));

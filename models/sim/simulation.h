@@ -89,6 +89,9 @@ class Simulation {
   std::unique_ptr<Interpreter<double>> interpreter_;
   std::unique_ptr<GpuTimestep> gpu_;
   std::vector<int> gpu_cg_iterations_;
+  // The GPU holds the host's inputs and state (set by a step, cleared by any host change):
+  // a step then starts from the device's copy, without an upload.
+  bool device_current_ = false;
   std::vector<PhysicalParameters> params_;
   std::vector<char> fixed_;
   double dt_, theta_;
