@@ -106,6 +106,28 @@ TEST(GpuForward, HostDrivenSolvesMatchInterpreter) {
   gpu_vs_interpreter("double", 1e-10, go);
 }
 
+// A graph without the extension (what `ssc simulate` runs), stepped through Simulation:
+// after the first step the state stays on the device.
+TEST(GpuForward, SimulationWithoutExtensionMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  const Scene scene = torus_scene();
+  const SimGrid grid = build_body_grid(scene);
+  Simulation cpu(scene, grid, 1, false), gpu(scene, grid, 1, false);
+  gpu.use_gpu();
+  for (int s = 0; s < 6; ++s) {
+    cpu.step();
+    gpu.step();
+  }
+  const size_t n = 3 * size_t(grid.node_count);
+  const std::vector<double> u_cpu(cpu.displacement(0), cpu.displacement(0) + n),
+      u_gpu(gpu.displacement(0), gpu.displacement(0) + n), v_cpu(cpu.velocity(0), cpu.velocity(0) + n),
+      v_gpu(gpu.velocity(0), gpu.velocity(0) + n);
+  const double err = std::max(relative_difference(u_cpu, u_gpu), relative_difference(v_cpu, v_gpu));
+  std::printf("[ double ] 6 steps without the extension, GPU vs interpreter: %.3g\n", err);
+  EXPECT_LT(err, 1e-10);
+}
+
 TEST(GpuForward, ReportsMissingGpuCleanly) {
   const std::string why = gpu_unavailable_reason();
   if (why.empty()) GTEST_SKIP() << "a GPU is present: " << gpu_description();
