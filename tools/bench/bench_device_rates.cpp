@@ -1,0 +1,122 @@
+// The GPU's measured ceilings, the floors that docs/benchmarks.md holds the steps
+// against: device memory bandwidth (a grid-stride copy of 2 x 2 GiB of doubles, bytes
+// read plus written) and the FP64 rate (eight independent fma chains per thread, enough
+// threads for every SM). The kernels go through the same NVRTC and driver-API runtime
+// as the generated ones; each timed iteration is one launch and a synchronisation.
+#include <benchmark/benchmark.h>
+#include <fmt/format.h>
+
+#include <string>
+
+#include "runtime/cuda_driver.h"
+#include "runtime/nvrtc_compiler.h"
+
+namespace ssc {
+namespace {
+
+const char* const kRateKernels = R"(
+extern "C" __global__ void rate_copy(const double* __restrict__ a, double* __restrict__ b, long long n) {
+  const long long stride = (long long)gridDim.x * blockDim.x;
+  for (long long i = (long long)blockIdx.x * blockDim.x + threadIdx.x; i < n; i += stride) b[i] = a[i];
+}
+extern "C" __global__ void rate_fma(double* out, int iterations, double a, double c) {
+  double x[8];
+  for (int k = 0; k < 8; ++k) x[k] = threadIdx.x + k;
+  for (int it = 0; it < iterations; ++it)
+#pragma unroll
+    for (int k = 0; k < 8; ++k) x[k] = fma(x[k], a, c);
+  double s = 0;
+  for (int k = 0; k < 8; ++k) s += x[k];
+  if (s == 1234.5) out[0] = s;  // never true for these inputs; keeps the chains alive
+}
+)";
+
+// The device, its context and the two kernels, set up once.
+struct RateDevice {
+  const cu::Driver* d = nullptr;
+  cu::Context ctx = nullptr;
+  cu::Function copy = nullptr, fma = nullptr;
+  int multiprocessors = 0;
+  std::string why;
+
+  RateDevice() {
+    d = cu::driver(&why);
+    if (!d) return;
+    if (!nvrtc_available()) {
+      why = "ssc was built without NVRTC";
+      d = nullptr;
+      return;
+    }
+    cu::Device device = 0;
+    cu::check(d->DeviceGet(&device, 0), "cuDeviceGet");
+    cu::check(d->DevicePrimaryCtxRetain(&ctx, device), "cuDevicePrimaryCtxRetain");
+    cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
+    int major = 0, minor = 0;
+    d->DeviceGetAttribute(&major, cu::kAttrComputeCapabilityMajor, device);
+    d->DeviceGetAttribute(&minor, cu::kAttrComputeCapabilityMinor, device);
+    d->DeviceGetAttribute(&multiprocessors, cu::kAttrMultiprocessorCount, device);
+    NvrtcOptions o;
+    o.arch = fmt::format("sm_{}{}", major, minor);
+    for (const char* name : {"rate_copy", "rate_fma"}) {
+      const CompiledKernel k = compile_kernel(name, kRateKernels, o);
+      cu::Module m = nullptr;
+      cu::check(d->ModuleLoadData(&m, k.image.data()), "cuModuleLoadData");
+      cu::check(d->ModuleGetFunction(std::string(name) == "rate_copy" ? &copy : &fma, m, name), "cuModuleGetFunction");
+    }
+  }
+};
+
+RateDevice* rate_device(benchmark::State& state) {
+  static RateDevice device;
+  if (!device.d) state.SkipWithError(("no usable GPU: " + device.why).c_str());
+  return device.d ? &device : nullptr;
+}
+
+void BM_GpuRateCopy(benchmark::State& state) {
+  RateDevice* g = rate_device(state);
+  if (!g) return;
+  cu::check(g->d->CtxSetCurrent(g->ctx), "cuCtxSetCurrent");
+  long long n = 256LL << 20;  // 2 GiB of doubles per buffer
+  cu::DevicePtr a = 0, b = 0;
+  cu::check(g->d->MemAlloc(&a, size_t(n) * 8), "cuMemAlloc");
+  cu::check(g->d->MemAlloc(&b, size_t(n) * 8), "cuMemAlloc");
+  cu::check(g->d->MemsetD8(a, 0, size_t(n) * 8), "cuMemsetD8");
+  void* args[] = {&a, &b, &n};
+  const unsigned blocks = unsigned(g->multiprocessors) * 8;
+  auto launch = [&] {
+    cu::check(g->d->LaunchKernel(g->copy, blocks, 1, 1, 256, 1, 1, 0, nullptr, args, nullptr), "rate_copy");
+    cu::check(g->d->CtxSynchronize(), "rate_copy");
+  };
+  launch();
+  for (auto _ : state) launch();
+  state.SetBytesProcessed(state.iterations() * n * 16);
+  g->d->MemFree(a);
+  g->d->MemFree(b);
+}
+
+void BM_GpuRateFp64(benchmark::State& state) {
+  RateDevice* g = rate_device(state);
+  if (!g) return;
+  cu::check(g->d->CtxSetCurrent(g->ctx), "cuCtxSetCurrent");
+  cu::DevicePtr out = 0;
+  cu::check(g->d->MemAlloc(&out, 8), "cuMemAlloc");
+  int iterations = 8192;
+  double a = 0.999999, c = 1e-7;
+  void* args[] = {&out, &iterations, &a, &c};
+  const unsigned blocks = unsigned(g->multiprocessors) * 16;
+  auto launch = [&] {
+    cu::check(g->d->LaunchKernel(g->fma, blocks, 1, 1, 256, 1, 1, 0, nullptr, args, nullptr), "rate_fma");
+    cu::check(g->d->CtxSynchronize(), "rate_fma");
+  };
+  launch();
+  for (auto _ : state) launch();
+  const double flops = 2.0 * 8 * iterations * double(blocks) * 256;
+  state.counters["fp64_flops"] = benchmark::Counter(flops * double(state.iterations()), benchmark::Counter::kIsRate);
+  g->d->MemFree(out);
+}
+
+BENCHMARK(BM_GpuRateCopy)->Name("GpuRate/copy_bandwidth")->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GpuRateFp64)->Name("GpuRate/fp64_fma")->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+}  // namespace ssc
