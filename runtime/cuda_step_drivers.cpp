@@ -4,8 +4,9 @@
 // Forward: newmark_init, diag, setup, then PCG with the element apply (cell kernel,
 // node gather) on u; the extension: setup (rhs from the active neighbours, the guess),
 // PCG with the band Laplacian on band_u. Each PCG is one persistent grid kernel
-// (newmark_pcg_grid; extension_pcg_grid or its two-phase form for large batches) when grid solves are on, whose outcomes the host
-// reads after the step; else the host-driven iteration kernels.
+// (newmark_pcg_grid; extension_pcg_grid, or its two-phase form for large batches) when
+// grid solves are on, whose outcomes the host reads after the step; else the host-driven
+// iteration kernels.
 // Adjoint (implicit-function adjoints, as runtime/interpreter_adjoint.cpp): the
 // extension's cotangent solve L y = band_u_bar into scratch y (warm-started from the
 // previous, later step's y within one backward pass), the time-step system's
