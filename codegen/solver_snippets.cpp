@@ -336,6 +336,39 @@ Snippet newmark_grid_loop(const Graph& g, int op) {
                          "  }\n"));
 }
 
+// The band solves' first band node per thread: its degree and neighbours in registers.
+std::string band_own_incidence() {
+  return "// The thread's first band node keeps its degree and neighbours in registers.\n"
+         "int own_nb[6];\n"
+         "#pragma unroll\n"
+         "for (int d = 0; d < 6; ++d) own_nb[d] = rank < n_band ? g_band_neighbors[6 * rank + d] : -1;\n"
+         "const int own_degree = rank < n_band ? g_band_degree[rank] : 0;\n";
+}
+
+// The band Laplacian over the kernel's value(source, node) (extension_apply), then the
+// solve's start on the vectors r, s, w.
+std::string band_laplacian_and_start(const std::string& own, const std::string& r, const std::string& s,
+                                     const std::string& w) {
+  return "// L e at band node n for the nodal values e = value(source, node); e(n) into en\n"
+         "// (extension_apply).\n"
+         "auto laplacian = [&](int n, int source, Vec3<Real>& en) {\n"
+         "  const bool mine = n == rank;\n"
+         "  en = value(source, n);\n"
+         "  Vec3<Real> s = Real(mine ? own_degree : g_band_degree[n]) * en;\n"
+         "#pragma unroll\n"
+         "  for (int d = 0; d < 6; ++d) {\n"
+         "    const int nb = mine ? own_nb[d] : g_band_neighbors[6 * n + d];\n"
+         "    if (nb >= 0) s -= value(source, nb);\n"
+         "  }\n"
+         "  return s;\n"
+         "};\n" +
+         grid_start_residual(own,
+                             "  Vec3<Real> xn;\n"
+                             "  const Vec3<Real> q = laplacian(n, kX, xn);\n",
+                             r, s) +
+         grid_start_sums(own, "  Vec3<Real> un;\n  const Vec3<Real> wn = laplacian(n, kU, un);\n", r, w);
+}
+
 // The band Laplacian L e(n) = deg(n) e(n) - sum of e over the band neighbours: one phase
 // per iteration, each thread evaluating u at its node's neighbours (next_u), so r, w, s
 // alternate between two buffers (neighbours read the previous iteration's while owners
@@ -349,30 +382,8 @@ Snippet extension_grid_loop(const Graph& g, int op) {
   const std::string own = "for (int n = rank; n < n_band; n += threads)";
   return b.code(grid_prologue() +
       "Real *r_now = v_r, *w_now = v_w, *s_now = v_s, *r_next = v_r2, *w_next = v_w2, *s_next = v_s2;\n" +
-      grid_next_u("r_now", "w_now", "s_now") +
-      "// The thread's first band node keeps its degree and neighbours in registers.\n"
-      "int own_nb[6];\n"
-      "#pragma unroll\n"
-      "for (int d = 0; d < 6; ++d) own_nb[d] = rank < n_band ? g_band_neighbors[6 * rank + d] : -1;\n"
-      "const int own_degree = rank < n_band ? g_band_degree[rank] : 0;\n"
-      "// L e at band node n for the nodal values e = value(source, node); e(n) into en\n"
-      "// (extension_apply).\n"
-      "auto laplacian = [&](int n, int source, Vec3<Real>& en) {\n"
-      "  const bool mine = n == rank;\n"
-      "  en = value(source, n);\n"
-      "  Vec3<Real> s = Real(mine ? own_degree : g_band_degree[n]) * en;\n"
-      "#pragma unroll\n"
-      "  for (int d = 0; d < 6; ++d) {\n"
-      "    const int nb = mine ? own_nb[d] : g_band_neighbors[6 * n + d];\n"
-      "    if (nb >= 0) s -= value(source, nb);\n"
-      "  }\n"
-      "  return s;\n"
-      "};\n" +
-      grid_start_residual(own,
-                          "  Vec3<Real> xn;\n"
-                          "  const Vec3<Real> q = laplacian(n, kX, xn);\n",
-                          "r_now", "s_now") +
-      grid_start_sums(own, "  Vec3<Real> un;\n  const Vec3<Real> wn = laplacian(n, kU, un);\n", "r_now", "w_now") +
+      grid_next_u("r_now", "w_now", "s_now") + band_own_incidence() +
+      band_laplacian_and_start(own, "r_now", "s_now", "w_now") +
       grid_loop(own, "  " + own + " {\n"
                          "    Vec3<Real> u_own;\n"
                          "    const Vec3<Real> wn = laplacian(n, kNextU, u_own);\n" +
@@ -396,35 +407,15 @@ Snippet extension_grid_two_phase(const Graph& g, int op) {
   grid_solve_params(b, "3 * n_band", "extension_two_phase");
   b.stage("whole PCG solve in one cooperative kernel, two phases per iteration (grid barriers)", true);
   const std::string own = "for (int n = rank; n < n_band; n += threads)";
-  return b.code(grid_prologue() +
-      "int own_nb[6];\n"
-      "#pragma unroll\n"
-      "for (int d = 0; d < 6; ++d) own_nb[d] = rank < n_band ? g_band_neighbors[6 * rank + d] : -1;\n"
-      "const int own_degree = rank < n_band ? g_band_degree[rank] : 0;\n"
+  return b.code(grid_prologue() + band_own_incidence() +
       "auto degree = [&](int m) { return m == rank ? own_degree : g_band_degree[m]; };\n"
       "// M^-1 = 1 / deg as a vector (extension_setup's inv_diag, the same bits).\n"
       "auto inv_diag = [&](int m) { const Real d = Real(1) / Real(degree(m)); return make_vec3(d, d, d); };\n"
       "constexpr int kX = 0, kU = 1;\n"
       "auto value = [&](int source, int m) {\n"
       "  return source == kX ? load3(v_x, m) : times(inv_diag(m), load3(v_r, m));\n"
-      "};\n"
-      "// L e at band node n for e = value(source, node); e(n) into en (extension_apply).\n"
-      "auto laplacian = [&](int n, int source, Vec3<Real>& en) {\n"
-      "  const bool mine = n == rank;\n"
-      "  en = value(source, n);\n"
-      "  Vec3<Real> s = Real(degree(n)) * en;\n"
-      "#pragma unroll\n"
-      "  for (int d = 0; d < 6; ++d) {\n"
-      "    const int nb = mine ? own_nb[d] : g_band_neighbors[6 * n + d];\n"
-      "    if (nb >= 0) s -= value(source, nb);\n"
-      "  }\n"
-      "  return s;\n"
       "};\n" +
-      grid_start_residual(own,
-                          "  Vec3<Real> xn;\n"
-                          "  const Vec3<Real> q = laplacian(n, kX, xn);\n",
-                          "v_r", "v_s") +
-      grid_start_sums(own, "  Vec3<Real> un;\n  const Vec3<Real> wn = laplacian(n, kU, un);\n", "v_r", "v_w") +
+      band_laplacian_and_start(own, "v_r", "v_s", "v_w") +
       grid_loop(own, "  " + own + " {\n"
                          "    const Vec3<Real> inv = inv_diag(n), rn_old = load3(v_r, n);\n"
                          "    const Vec3<Real> sn = load3(v_w, n) + beta * load3(v_s, n);\n"
