@@ -51,5 +51,13 @@ printf "%-28s %s\n" "build time" "$((t1 - t0)) s"
 printf "%-28s %s\n" "tests passed/failed/skipped" "$passed/$failed/$skipped (rc $test_rc)"
 printf "%-28s %s\n" "benchmarks" "$bench_rc"
 grep -E "^\[ (double|float) \]" "$LOG/tests.txt" | sed 's/^/  /'
+if [ -f "$LOG/bench.txt" ] && [ "$bench_rc" != "-" ]; then
+  # Steps at batch 1 and 32 with their ratio, and the GPU's measured ceilings.
+  awk '/^Gpu(Forward|Adjoint)Step\// { split($1, p, "/"); k = p[1] "/" p[2] "/" p[3]; t[k, p[4]] = $2; keys[k] = 1 }
+       /^GpuRate\// { print "  " $0 }
+       END { for (k in keys) if (t[k, 1] != "" && t[k, 32] != "")
+               printf "  %-34s batch 1 %7s ms  batch 32 %7s ms  (%.1fx)\n", k, t[k, 1], t[k, 32], t[k, 32] / t[k, 1] }' \
+      "$LOG/bench.txt" | sort
+fi
 grep -E "ms/launch" "$LOG/kernels.txt" | head -40 | sed 's/^/  /'
 exit "$test_rc"
