@@ -1,8 +1,10 @@
 // The generated kernels on a GPU against the CPU interpreter (every test here skips
 // without a usable GPU; tools/device-check.sh runs them on the device machine):
 //  - GpuForward: one forward step, double and float, every tensor compared; determinism;
-//    the host-driven solves (grid solves off) too;
-//  - GpuProfile: per-kernel profile and step times of the torus and the teddy-sized body;
+//    the host-driven solves (grid solves off) too; Simulation's steps without the extension;
+//  - GpuProfile: per-kernel profile and step times of the torus and the teddy-sized body,
+//    per-kernel times of batches of 32 (teddy-sized, dragon);
+//  - GpuExtension: the extension's one- and two-phase grid solves give the same bits;
 //  - GpuAdjoint: one adjoint step from random cotangents (every input and state
 //    cotangent compared), determinism, and a whole trajectory's gradient per parameter
 //    with the backward pass on the GPU against the interpreter's.
@@ -150,7 +152,7 @@ void print_timings(const GpuTimestep& gpu, const char* real, const char* body) {
 
 // Per-kernel launches and times (synchronised after every launch) of a forward and an
 // adjoint step, and the unprofiled step times, for the torus and the teddy-sized body
-// (and the per-kernel times of a batch of 32 teddy-sized simulations).
+// (and the per-kernel times of batches of 32 teddy-sized and dragon simulations).
 TEST(GpuProfile, TorusAndTeddySteps) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
