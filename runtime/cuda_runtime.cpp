@@ -275,8 +275,8 @@ void GpuTimestep::Impl::decide_grid_solves() {
   if (!grid_solves || !one_phase) return;  // a graph without the extension has no choice to make
   int phases = options.extension_phases;
   if (const char* e = std::getenv("SSC_GPU_EXTENSION_PHASES")) phases = std::atoi(e);
-  // Measured on an H200: two phases pay from about two band nodes per thread (batch 32:
-  // 20-30% faster), one phase is faster up to about one (batch 1: 15-25%; batch 8: up to 10%).
+  // Measured on an H200 (whole steps): two phases pay from about two band nodes per thread
+  // (batch 32: 10-27% faster), one phase up to about one (batch 1: 13-29%; batch 8: 0-10%).
   if (phases != 1 && phases != 2)
     phases = 2L * grid_blocks(*one_phase, sizes.band) * kGridBlock <= sizes.band ? 2 : 1;
   extension_grid = phases == 2 ? "extension_pcg_grid_two_phase" : "extension_pcg_grid";
