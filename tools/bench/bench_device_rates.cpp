@@ -66,6 +66,17 @@ struct RateDevice {
   }
 };
 
+// One warm-up launch of f, then one launch and a synchronisation per timed iteration.
+void time_launches(benchmark::State& state, const RateDevice& g, cu::Function f, unsigned blocks, void** args,
+                   const char* what) {
+  auto launch = [&] {
+    cu::check(g.d->LaunchKernel(f, blocks, 1, 1, 256, 1, 1, 0, nullptr, args, nullptr), what);
+    cu::check(g.d->CtxSynchronize(), what);
+  };
+  launch();
+  for (auto _ : state) launch();
+}
+
 RateDevice* rate_device(benchmark::State& state) {
   static RateDevice device;
   if (!device.d) state.SkipWithError(("no usable GPU: " + device.why).c_str());
@@ -82,13 +93,7 @@ void BM_GpuRateCopy(benchmark::State& state) {
   cu::check(g->d->MemAlloc(&b, size_t(n) * 8), "cuMemAlloc");
   cu::check(g->d->MemsetD8(a, 0, size_t(n) * 8), "cuMemsetD8");
   void* args[] = {&a, &b, &n};
-  const unsigned blocks = unsigned(g->multiprocessors) * 8;
-  auto launch = [&] {
-    cu::check(g->d->LaunchKernel(g->copy, blocks, 1, 1, 256, 1, 1, 0, nullptr, args, nullptr), "rate_copy");
-    cu::check(g->d->CtxSynchronize(), "rate_copy");
-  };
-  launch();
-  for (auto _ : state) launch();
+  time_launches(state, *g, g->copy, unsigned(g->multiprocessors) * 8, args, "rate_copy");
   state.SetBytesProcessed(state.iterations() * n * 16);
   g->d->MemFree(a);
   g->d->MemFree(b);
@@ -104,12 +109,7 @@ void BM_GpuRateFp64(benchmark::State& state) {
   double a = 0.999999, c = 1e-7;
   void* args[] = {&out, &iterations, &a, &c};
   const unsigned blocks = unsigned(g->multiprocessors) * 16;
-  auto launch = [&] {
-    cu::check(g->d->LaunchKernel(g->fma, blocks, 1, 1, 256, 1, 1, 0, nullptr, args, nullptr), "rate_fma");
-    cu::check(g->d->CtxSynchronize(), "rate_fma");
-  };
-  launch();
-  for (auto _ : state) launch();
+  time_launches(state, *g, g->fma, blocks, args, "rate_fma");
   const double flops = 2.0 * 8 * iterations * double(blocks) * 256;
   state.counters["fp64_flops"] = benchmark::Counter(flops * double(state.iterations()), benchmark::Counter::kIsRate);
   g->d->MemFree(out);
