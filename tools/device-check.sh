@@ -43,8 +43,9 @@ echo "== kernel table (ssc kernels)"
 "$BUILD/bin/ssc" kernels "$ROOT/examples/torus.json" --out "$LOG/kernels-torus" 2>&1 | tail -60 | tee "$LOG/kernels.txt"
 
 passed=$(grep -c '^\[       OK \]' "$LOG/tests.txt")
-failed=$(grep -c '^\[  FAILED  \] [A-Za-z]' "$LOG/tests.txt")
-skipped=$(grep -c '^\[  SKIPPED \] [A-Za-z]' "$LOG/tests.txt")
+# gtest lists failed and skipped tests twice; the timed line is counted once.
+failed=$(grep -c '^\[  FAILED  \] [A-Za-z].*ms)$' "$LOG/tests.txt")
+skipped=$(grep -c '^\[  SKIPPED \] [A-Za-z].*ms)$' "$LOG/tests.txt")
 echo
 echo "================ device check summary ================"
 printf "%-28s %s\n" "build time" "$((t1 - t0)) s"
