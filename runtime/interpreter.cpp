@@ -12,6 +12,7 @@
 #include "ops/gather.h"
 #include "ops/newmark.h"
 #include "ops/polar.h"
+#include "runtime/batch_loop.h"
 #include "runtime/cpu_kernels.h"
 #include "runtime/pcg.h"
 
@@ -70,7 +71,7 @@ void Interpreter<Real>::run_op(int op) {
 
 template <class Real>
 void Interpreter<Real>::execute(const OpNode& op) {
-  for_each_item([&](int b) { execute_item(op, b); });
+  for_each_batch_item(batch(), [&](int b) { execute_item(op, b); });
 }
 
 template <class Real>

@@ -3,7 +3,6 @@
 // are split across threads with OpenMP; every index writes only its own outputs, and
 // all sums are gathers or fixed-order reductions, so results are bitwise reproducible.
 #pragma once
-#include <exception>
 #include <vector>
 
 #include "graph/graph.h"
@@ -59,10 +58,6 @@ class Interpreter {
   void run_op_adjoint(int op);
 
  private:
-  // Runs fn(b) for every batch item, items in parallel (each writes only its own slices;
-  // a loop inside an item then runs on one thread); the first failure is rethrown after all.
-  template <class Fn>
-  void for_each_item(Fn&& fn);
   void execute(const OpNode& op);
   void execute_item(const OpNode& op, int b);
   void execute_adjoint(const OpNode& op);
@@ -79,23 +74,6 @@ class Interpreter {
   std::vector<Real> node_rest_;  // rest positions of the active nodes, in Real
   std::vector<std::vector<Real>> extension_adjoint_guess_;  // per batch item, warm start
 };
-
-template <class Real>
-template <class Fn>
-void Interpreter<Real>::for_each_item(Fn&& fn) {
-  const int B = batch();
-  std::vector<std::exception_ptr> errors(B);
-#pragma omp parallel for schedule(dynamic, 1) if (B > 1)
-  for (int b = 0; b < B; ++b) {
-    try {
-      fn(b);
-    } catch (...) {
-      errors[b] = std::current_exception();
-    }
-  }
-  for (const std::exception_ptr& e : errors)
-    if (e) std::rethrow_exception(e);
-}
 
 extern template class Interpreter<double>;
 extern template class Interpreter<float>;

@@ -10,6 +10,7 @@
 #include "ops/gather.h"
 #include "ops/newmark.h"
 #include "ops/polar.h"
+#include "runtime/batch_loop.h"
 #include "runtime/cpu_kernels.h"
 #include "runtime/interpreter.h"
 
@@ -47,7 +48,7 @@ Real ordered_sum(const std::vector<Real>& v) {
 
 template <class Real>
 void Interpreter<Real>::execute_adjoint(const OpNode& op) {
-  for_each_item([&](int b) { execute_adjoint_item(op, b); });
+  for_each_batch_item(batch(), [&](int b) { execute_adjoint_item(op, b); });
 }
 
 template <class Real>

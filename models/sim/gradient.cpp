@@ -5,6 +5,7 @@
 #include <map>
 #include <stdexcept>
 
+#include "runtime/batch_loop.h"
 #include "runtime/cuda_runtime.h"
 
 namespace ssc {
@@ -58,9 +59,8 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
 
   auto take_frame_costs = [&](int t) {
     auto range = frames_at.equal_range(t);
-    // Batch items in parallel (the cost is const; each item writes its own seeds and results).
-#pragma omp parallel for schedule(dynamic) if (B > 1)
-    for (int b = 0; b < B; ++b)
+    if (range.first == range.second) return;
+    auto item_costs = [&](int b) {
       for (auto it = range.first; it != range.second; ++it) {
         FrameSeed* seed = nullptr;
         if (options.gradient) {
@@ -75,6 +75,9 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
         results[b].frames[it->second] = fc;
         results[b].cost += fc.cost;
       }
+    };
+    // Batch items in parallel (the cost is const; each item writes its own seeds and results).
+    for_each_batch_item(B, item_costs);
   };
 
   sim.reset();
