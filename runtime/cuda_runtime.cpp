@@ -57,6 +57,8 @@ GpuTimestep::Impl::~Impl() {
   for (Buffer* x : {&adjoint_arena, &saved_adjoints, &chain_staging})
     if (x->ptr) d->MemFree(x->ptr);
   for (auto& [n, x] : grid_buffers) d->MemFree(x.ptr);
+  for (auto& [k, x] : snapshots) d->MemFree(x.ptr);
+  for (Buffer& x : spare_snapshots) d->MemFree(x.ptr);
   for (auto& [n, x] : scratch) d->MemFree(x.ptr);
   for (auto& [n, e] : graph_execs) d->GraphExecDestroy(e);
   for (cu::Graph g : graph_list) d->GraphDestroy(g);
@@ -634,6 +636,55 @@ void GpuTimestep::copy_tensors(const std::vector<std::pair<int, int>>& from_to) 
     if (a.bytes != b.bytes) throw std::logic_error("gpu: copy_tensors between tensors of different sizes");
     cu::check(m.d->MemcpyDtoD(b.ptr, a.ptr, a.bytes), "copy tensor");
   }
+}
+
+void GpuTimestep::save_snapshot(int key, const std::vector<int>& tensors) {
+  Impl& m = *impl_;
+  cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
+  size_t bytes = 0;
+  for (int t : tensors) bytes += m.tensors.at(t).bytes;
+  auto it = m.snapshots.find(key);
+  if (it == m.snapshots.end()) {
+    auto spare = std::find_if(m.spare_snapshots.begin(), m.spare_snapshots.end(),
+                              [&](const Impl::Buffer& x) { return x.bytes >= bytes; });
+    Impl::Buffer buffer;
+    if (spare != m.spare_snapshots.end()) {
+      buffer = *spare;
+      m.spare_snapshots.erase(spare);
+    } else {
+      buffer = m.alloc(bytes);
+    }
+    it = m.snapshots.emplace(key, buffer).first;
+  }
+  if (it->second.bytes < bytes) throw std::logic_error("gpu: save_snapshot with more tensors than the key holds");
+  size_t offset = 0;
+  for (int t : tensors) {
+    const Impl::Buffer& x = m.tensors[t];
+    cu::check(m.d->MemcpyDtoD(it->second.ptr + offset, x.ptr, x.bytes), "save snapshot");
+    offset += x.bytes;
+  }
+}
+
+void GpuTimestep::load_snapshot(int key, const std::vector<int>& tensors) {
+  Impl& m = *impl_;
+  const auto it = m.snapshots.find(key);
+  if (it == m.snapshots.end()) throw std::logic_error("gpu: load_snapshot of a key never saved");
+  cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
+  size_t offset = 0;
+  for (int t : tensors) {
+    const Impl::Buffer& x = m.tensors.at(t);
+    if (offset + x.bytes > it->second.bytes) throw std::logic_error("gpu: load_snapshot of more than was saved");
+    cu::check(m.d->MemcpyDtoD(x.ptr, it->second.ptr + offset, x.bytes), "load snapshot");
+    offset += x.bytes;
+  }
+}
+
+void GpuTimestep::drop_snapshot(int key) {
+  Impl& m = *impl_;
+  const auto it = m.snapshots.find(key);
+  if (it == m.snapshots.end()) return;
+  m.spare_snapshots.push_back(it->second);
+  m.snapshots.erase(it);
 }
 
 void GpuTimestep::run() { impl_->run(); }

@@ -91,6 +91,13 @@ class GpuTimestep {
   // Device copies between tensors of one size (from, to): the step's outputs become the
   // next step's state without a host round trip.
   void copy_tensors(const std::vector<std::pair<int, int>>& from_to);
+  // Device snapshots of tensors (all batch items) under an integer key: the state
+  // checkpoints of a backward pass, kept on the device. save_snapshot copies the tensors
+  // in (the key's buffer is allocated on first use, or reused from a dropped one),
+  // load_snapshot copies the same tensors back, drop_snapshot releases the key.
+  void save_snapshot(int key, const std::vector<int>& tensors);
+  void load_snapshot(int key, const std::vector<int>& tensors);
+  void drop_snapshot(int key);
 
   // Adjoint of the step that the last run() computed (the forward values stay on the
   // device). clear_adjoints(true) zeroes every cotangent and starts a backward pass;

@@ -77,6 +77,9 @@ struct GpuTimestep::Impl {
   // clear is one memset), a view per tensor; the copy kept by save_adjoints.
   Buffer adjoint_arena, saved_adjoints, chain_staging;
   size_t adjoint_input_bytes = 0;
+  // State snapshots by key, and released buffers kept for reuse (cuMemFree synchronises).
+  std::map<int, Buffer> snapshots;
+  std::vector<Buffer> spare_snapshots;
   std::vector<Buffer> adjoints;
   std::map<std::string, Buffer> grid_buffers, scratch;
   std::vector<int> cg_iterations, adjoint_cg_iterations;

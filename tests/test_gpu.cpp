@@ -2,6 +2,7 @@
 // without a usable GPU; tools/device-check.sh runs them on the device machine):
 //  - GpuForward: one forward step, double and float, every tensor compared; determinism;
 //    the host-driven solves (grid solves off) too; Simulation's steps without the extension;
+//    steps that keep the state on the device, and device checkpoints, against host steps;
 //  - GpuProfile: per-kernel profile and step times of the torus and the teddy-sized body,
 //    per-kernel times of batches of 32 (teddy-sized, dragon);
 //  - GpuExtension: the extension's one- and two-phase grid solves give the same bits;
@@ -128,6 +129,48 @@ TEST(GpuForward, SimulationWithoutExtensionMatchesInterpreter) {
   const double err = std::max(relative_difference(u_cpu, u_gpu), relative_difference(v_cpu, v_gpu));
   std::printf("[ double ] 6 steps without the extension, GPU vs interpreter: %.3g\n", err);
   EXPECT_LT(err, 1e-10);
+}
+
+// Steps that leave the state on the device, and device checkpoints, give the bits of
+// steps that copy every state back; the host state is refused until synced.
+TEST(GpuForward, DeviceOnlyStepsAndCheckpointsMatchHostSteps) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  const Scene scene = torus_scene();
+  const SimGrid grid = build_body_grid(scene);
+  Simulation host(scene, grid, 2, true), device(scene, grid, 2, true);
+  for (Simulation* sim : {&host, &device}) {
+    sim->use_gpu();
+    PhysicalParameters p = sim->parameters(1);
+    p.angular_velocity = Eigen::Vector3d(0.5, 2.0, -0.4);
+    sim->set_parameters(1, p);
+  }
+  std::vector<std::vector<double>> at3;
+  for (int s = 1; s <= 6; ++s) {
+    host.step();
+    if (s == 3)
+      for (int b = 0; b < 2; ++b) at3.push_back(host.state(b).u);
+    device.step(false);
+    if (s == 3) device.save_checkpoint(7);
+  }
+  EXPECT_THROW(device.displacement(0), std::logic_error);
+  device.sync_host();
+  const size_t n = 3 * size_t(grid.node_count), nb = 3 * size_t(grid.band_count);
+  for (int b = 0; b < 2; ++b) {
+    EXPECT_EQ(std::vector<double>(host.displacement(b), host.displacement(b) + n),
+              std::vector<double>(device.displacement(b), device.displacement(b) + n));
+    EXPECT_EQ(std::vector<double>(host.velocity(b), host.velocity(b) + n),
+              std::vector<double>(device.velocity(b), device.velocity(b) + n));
+    EXPECT_EQ(std::vector<double>(host.band_displacement(b), host.band_displacement(b) + nb),
+              std::vector<double>(device.band_displacement(b), device.band_displacement(b) + nb));
+  }
+  device.load_checkpoint(7);
+  EXPECT_EQ(device.steps_taken(), 3);
+  device.sync_host();
+  for (int b = 0; b < 2; ++b)
+    EXPECT_EQ(at3[b], std::vector<double>(device.displacement(b), device.displacement(b) + n));
+  device.drop_checkpoint(7);
+  EXPECT_THROW(device.load_checkpoint(7), std::logic_error);
 }
 
 TEST(GpuForward, ReportsMissingGpuCleanly) {

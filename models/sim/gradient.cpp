@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <map>
+#include <set>
 #include <stdexcept>
 
 #include "runtime/batch_loop.h"
@@ -55,8 +56,6 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
   for (auto& r : results) r.frames.resize(frame_steps.size());
   // seeds[b][step] for the frames' cotangents
   std::vector<std::map<int, FrameSeed>> seeds(B);
-  std::vector<std::map<int, Simulation::State>> stored(B);
-
   auto take_frame_costs = [&](int t) {
     auto range = frames_at.equal_range(t);
     if (range.first == range.second) return;
@@ -80,13 +79,21 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
     for_each_batch_item(B, item_costs);
   };
 
+  // The forward pass keeps the state on the device between frames (GPU) and checkpoints
+  // every K-th step where the steps run; the state of every step is the checkpoint keyed
+  // by its step number.
+  std::set<int> saved;
+  auto checkpoint = [&](int t) {
+    sim.save_checkpoint(t);
+    saved.insert(t);
+  };
   sim.reset();
-  for (int b = 0; b < B; ++b) stored[b][0] = sim.state(b);
+  if (options.gradient) checkpoint(0);
   take_frame_costs(0);
   for (int t = 1; t <= steps; ++t) {
-    sim.step();
-    if (options.gradient && t % K == 0)
-      for (int b = 0; b < B; ++b) stored[b][t] = sim.state(b);
+    sim.step(false);
+    if (options.gradient && t % K == 0) checkpoint(t);
+    if (frames_at.count(t) || t == steps) sim.sync_host();  // also checks for an explosion
     take_frame_costs(t);
   }
   if (!options.gradient) return results;
@@ -101,23 +108,19 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
   if (gpu) gpu->clear_adjoints(true);
   const size_t n3 = 3 * size_t(g.node_count), b3 = 3 * size_t(g.band_count);
   std::vector<std::vector<double>> u_bar(B, std::vector<double>(n3, 0.0)), v_bar(B, std::vector<double>(n3, 0.0));
-  // States of the current checkpoint segment, recomputed on entry.
-  std::vector<std::map<int, Simulation::State>> segment(B);
   for (int t = steps; t >= 1; --t) {
-    const int base = ((t - 1) / K) * K;  // checkpoint at or below t-1
-    if (segment[0].find(t - 1) == segment[0].end()) {
-      for (int b = 0; b < B; ++b) {
-        segment[b].clear();
-        segment[b][base] = stored[b].at(base);
-        sim.set_state(b, stored[b].at(base), base);
-      }
+    if (!saved.count(t - 1)) {  // recompute the checkpoint segment below t from its first state
+      const int base = ((t - 1) / K) * K;
+      sim.load_checkpoint(base);
       for (int s = base + 1; s < t; ++s) {
-        sim.step();
-        for (int b = 0; b < B; ++b) segment[b][s] = sim.state(b);
+        sim.step(false);
+        checkpoint(s);
       }
     }
-    for (int b = 0; b < B; ++b) sim.set_state(b, segment[b].at(t - 1), t - 1);
+    sim.load_checkpoint(t - 1);
     sim.recompute_step();
+    sim.drop_checkpoint(t - 1);  // no later (earlier-step) iteration needs it
+    saved.erase(t - 1);
     if (gpu) {
       // The state's cotangents stay on the device from step to step; the host adds the
       // frames' seeds where there are any.
@@ -167,6 +170,7 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
     for (int b = 0; b < B; ++b) std::copy_n(adj.data(tg.v_prev, b), n3, v_bar[b].begin());
   }
 
+  sim.sync_host();  // the initial state, the last one the backward pass loaded
   for (int b = 0; b < B; ++b) {
     ParameterGradient& pg = results[b].gradient;
     pg.youngs_modulus = adj.data(tg.youngs_modulus, b)[0];

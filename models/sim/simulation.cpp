@@ -52,8 +52,11 @@ Simulation::~Simulation() = default;
 void Simulation::use_gpu(const std::string& real) {
   GpuOptions options;
   options.real = real;
+  sync_host();
   gpu_ = std::make_unique<GpuTimestep>(graph_.graph, grid_, batch(), interpreter_->options(), options);
   device_current_ = false;
+  checkpoint_steps_.clear();
+  host_checkpoints_.clear();
 }
 
 int Simulation::last_cg_iterations(int b) const {
@@ -99,6 +102,7 @@ double Simulation::total_mass() const {
 
 void Simulation::reset() {
   device_current_ = false;
+  host_stale_ = false;
   TensorStore<double>& st = interpreter_->store();
   for (int b = 0; b < batch(); ++b) {
     write_inputs(b);
@@ -145,15 +149,16 @@ void Simulation::check_state(int b) const {
                                       steps_, b, worst, worst / extent));
 }
 
-void Simulation::step() {
+void Simulation::step(bool to_host) {
   TensorStore<double>& st = interpreter_->store();
   try {
     if (gpu_) {
       if (!device_current_) gpu_->upload(st);
       device_current_ = false;
       gpu_->run();
-      for (int t : {graph_.u, graph_.v, graph_.band_u, graph_.cg_iterations})
-        if (t >= 0) gpu_->download(st, t);
+      if (to_host)
+        for (int t : {graph_.u, graph_.v, graph_.band_u, graph_.cg_iterations})
+          if (t >= 0) gpu_->download(st, t);
       std::vector<std::pair<int, int>> advance = {{graph_.u, graph_.u_prev}, {graph_.v, graph_.v_prev}};
       if (graph_.band_u >= 0) advance.push_back({graph_.band_u, graph_.band_guess});
       gpu_->copy_tensors(advance);
@@ -165,12 +170,66 @@ void Simulation::step() {
     throw SimulationError(fmt::format("step {}: {}", steps_ + 1, e.what()));
   }
   ++steps_;
+  if (gpu_ && !to_host) {
+    host_stale_ = true;
+    return;
+  }
+  host_stale_ = false;
   for (int b = 0; b < batch(); ++b) {
     std::copy_n(st.data(graph_.u, b), 3 * grid_.node_count, st.data(graph_.u_prev, b));
     std::copy_n(st.data(graph_.v, b), 3 * grid_.node_count, st.data(graph_.v_prev, b));
     if (graph_.band_u >= 0) std::copy_n(st.data(graph_.band_u, b), 3 * grid_.band_count, st.data(graph_.band_guess, b));
     check_state(b);
   }
+}
+
+void Simulation::sync_host() {
+  if (!host_stale_) return;
+  TensorStore<double>& st = interpreter_->store();
+  for (int t : state_tensors()) gpu_->download(st, t);
+  host_stale_ = false;
+  for (int b = 0; b < batch(); ++b) check_state(b);
+}
+
+std::vector<int> Simulation::state_tensors() const {
+  std::vector<int> t = {graph_.u_prev, graph_.v_prev};
+  if (graph_.band_guess >= 0) t.push_back(graph_.band_guess);
+  return t;
+}
+
+void Simulation::save_checkpoint(int key) {
+  if (gpu_) {
+    if (!device_current_) gpu_->upload(interpreter_->store());
+    device_current_ = true;
+    gpu_->save_snapshot(key, state_tensors());
+  } else {
+    std::vector<std::vector<double>>& saved = host_checkpoints_[key];
+    saved.clear();
+    for (int t : state_tensors()) saved.push_back(interpreter_->store().all(t));
+  }
+  checkpoint_steps_[key] = steps_;
+}
+
+void Simulation::load_checkpoint(int key) {
+  const auto step = checkpoint_steps_.find(key);
+  if (step == checkpoint_steps_.end()) throw std::logic_error("Simulation: load_checkpoint of a key never saved");
+  if (gpu_) {
+    if (!device_current_) gpu_->upload(interpreter_->store());  // the inputs
+    gpu_->load_snapshot(key, state_tensors());
+    device_current_ = true;
+    host_stale_ = true;
+  } else {
+    const std::vector<int> tensors = state_tensors();
+    const std::vector<std::vector<double>>& saved = host_checkpoints_.at(key);
+    for (size_t i = 0; i < tensors.size(); ++i) interpreter_->store().all(tensors[i]) = saved[i];
+  }
+  steps_ = step->second;
+}
+
+void Simulation::drop_checkpoint(int key) {
+  checkpoint_steps_.erase(key);
+  host_checkpoints_.erase(key);
+  if (gpu_) gpu_->drop_snapshot(key);
 }
 
 void Simulation::recompute_step() {
@@ -193,6 +252,7 @@ Simulation::State Simulation::state(int b) const {
 }
 
 void Simulation::set_state(int b, const State& s, int step) {
+  sync_host();  // the other items' state
   device_current_ = false;
   TensorStore<double>& st = interpreter_->store();
   std::copy(s.u.begin(), s.u.end(), st.data(graph_.u_prev, b));
@@ -206,9 +266,20 @@ void Simulation::set_state(int b, const State& s, int step) {
   steps_ = step;
 }
 
-const double* Simulation::displacement(int b) const { return interpreter_->store().data(graph_.u_prev, b); }
-const double* Simulation::velocity(int b) const { return interpreter_->store().data(graph_.v_prev, b); }
+void Simulation::require_host_state() const {
+  if (host_stale_) throw std::logic_error("Simulation: the state is on the device; call sync_host() first");
+}
+
+const double* Simulation::displacement(int b) const {
+  require_host_state();
+  return interpreter_->store().data(graph_.u_prev, b);
+}
+const double* Simulation::velocity(int b) const {
+  require_host_state();
+  return interpreter_->store().data(graph_.v_prev, b);
+}
 const double* Simulation::band_displacement(int b) const {
+  require_host_state();
   return graph_.band_u >= 0 ? interpreter_->store().data(graph_.band_guess, b) : nullptr;
 }
 

@@ -2,6 +2,7 @@
 // interpreter in double, one set of physical parameters per batch item.
 #pragma once
 #include <Eigen/Core>
+#include <map>
 #include <memory>
 #include <vector>
 
@@ -43,7 +44,11 @@ class Simulation {
   // Rest state with the initial velocity; called by the constructor and set_parameters.
   void reset();
   // Advances every batch item by one step; SimulationError names the step on failure.
-  void step();
+  // On the GPU, step(false) leaves the new state on the device alone: sync_host() copies it
+  // back and checks it (an exploding simulation is reported there); until then the state
+  // accessors below (displacement() and all built on it) throw std::logic_error.
+  void step(bool to_host = true);
+  void sync_host();
   int steps_taken() const { return steps_; }
   double dt() const { return dt_; }
 
@@ -70,6 +75,11 @@ class Simulation {
   // Runs the step from the current state again without advancing (the adjoint's
   // recomputation of a step's intermediates), on whichever device runs the steps.
   void recompute_step();
+  // Whole-batch state checkpoints under a key (the adjoint's stored steps), kept where the
+  // steps run (device memory on the GPU); load_checkpoint restores the state and its step.
+  void save_checkpoint(int key);
+  void load_checkpoint(int key);
+  void drop_checkpoint(int key);
   // The centre of mass the initial spin is taken about.
   const Eigen::Vector3d& spin_center() const { return spin_center_; }
 
@@ -83,6 +93,8 @@ class Simulation {
  private:
   void write_inputs(int b);
   void check_state(int b) const;
+  void require_host_state() const;
+  std::vector<int> state_tensors() const;  // u_prev, v_prev and, with extension, band_guess
 
   const SimGrid& grid_;
   TimestepGraph graph_;
@@ -92,6 +104,10 @@ class Simulation {
   // The GPU holds the host's inputs and state (set by a step, cleared by any host change):
   // a step then starts from the device's copy, without an upload.
   bool device_current_ = false;
+  // The device holds a newer state than the host (step(false), load_checkpoint).
+  bool host_stale_ = false;
+  std::map<int, int> checkpoint_steps_;                          // key -> step
+  std::map<int, std::vector<std::vector<double>>> host_checkpoints_;  // key -> state tensors (CPU)
   std::vector<PhysicalParameters> params_;
   std::vector<char> fixed_;
   double dt_, theta_;
