@@ -374,17 +374,29 @@ TEST(GpuAdjoint, TrajectoryGradientMatchesInterpreter) {
     }
     return c;
   };
-  GradientOptions options;
-  options.checkpoint_every = 5;
-  std::vector<CostGradient> results[2];
-  for (int device = 0; device < 2; ++device) {
+  // CPU and GPU with state checkpoints every 5 steps (recomputed segments); the GPU again
+  // with every step kept whole on the device (the default for short runs).
+  GradientOptions checkpoints, whole;
+  checkpoints.checkpoint_every = 5;
+  std::vector<CostGradient> results[3];
+  for (int run = 0; run < 3; ++run) {
     Simulation sim(scene, grid, 2, true);
-    if (device == 1) sim.use_gpu();
+    if (run > 0) sim.use_gpu();
     PhysicalParameters p = sim.parameters(1);
     p.youngs_modulus *= 1.4;
     p.linear_velocity = Eigen::Vector3d(0.4, -1.5, 0.1);
     sim.set_parameters(1, p);
-    results[device] = evaluate_trajectory_gradient(sim, {4, 8, 12}, cost, options);
+    results[run] = evaluate_trajectory_gradient(sim, {4, 8, 12}, cost, run < 2 ? checkpoints : whole);
+  }
+  for (int b = 0; b < 2; ++b) {
+    EXPECT_EQ(results[1][b].cost, results[2][b].cost);
+    const ParameterGradient &r = results[1][b].gradient, &k = results[2][b].gradient;
+    EXPECT_TRUE(r.youngs_modulus == k.youngs_modulus && r.poisson_ratio == k.poisson_ratio && r.density == k.density &&
+                r.mass_damping == k.mass_damping && r.stiffness_damping == k.stiffness_damping &&
+                r.gravity == k.gravity && r.linear_velocity == k.linear_velocity &&
+                r.angular_velocity == k.angular_velocity && r.plane_height == k.plane_height &&
+                r.plane_normal == k.plane_normal)
+        << "item " << b << ": steps kept whole on the device differ from recomputed steps";
   }
   for (int b = 0; b < 2; ++b) {
     const ParameterGradient &c = results[0][b].gradient, &g = results[1][b].gradient;

@@ -322,16 +322,20 @@ TEST(GradientPipeline, ClampedBarAdjointMatchesCentralDifferences) {
 TEST(GradientPipeline, CheckpointingGivesTheSameGradient) {
   const Pipeline& pl = pipeline();
   Simulation sim(pl.scene, pl.grid, 1, true);
-  GradientOptions every, third;
+  GradientOptions every, third, whole;
   every.checkpoint_every = 1;
   third.checkpoint_every = 3;
+  ASSERT_LE(double(pl.frames.back().step) * double(sim.step_bytes()), whole.memory_budget_bytes);  // steps kept whole
   const std::vector<double> a = flatten(evaluate_cost_gradient(sim, *pl.cost, pl.frames, every)[0]);
   const std::vector<double> b = flatten(evaluate_cost_gradient(sim, *pl.cost, pl.frames, third)[0]);
+  const std::vector<double> c = flatten(evaluate_cost_gradient(sim, *pl.cost, pl.frames, whole)[0]);
   double worst = 0;
   for (size_t i = 0; i < a.size(); ++i) worst = std::max(worst, std::abs(a[i] - b[i]) / std::max(std::abs(a[i]), 1e-300));
-  std::printf("checkpoint_every 3 vs every step stored: worst relative difference %.2e (bitwise equal: %s)\n", worst,
-              bitwise_equal(a, b) ? "yes" : "no");
+  std::printf("checkpoint_every 3 vs every state stored: worst relative difference %.2e (bitwise equal: %s); "
+              "steps kept whole vs every state stored: bitwise equal: %s\n",
+              worst, bitwise_equal(a, b) ? "yes" : "no", bitwise_equal(a, c) ? "yes" : "no");
   EXPECT_LE(worst, 1e-12);
+  EXPECT_TRUE(bitwise_equal(a, c));
 }
 
 TEST(GradientPipeline, BatchOfTwoEqualsTwoSingleRunsBitwise) {

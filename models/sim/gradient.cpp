@@ -16,8 +16,10 @@ struct FrameSeed {
   std::vector<double> u_bar, band_bar;
 };
 
+// 0: every step kept whole (no recomputation); k > 0: the state of every k-th step.
 int choose_checkpoint_interval(const Simulation& sim, int steps, const GradientOptions& o) {
   if (o.checkpoint_every > 0) return o.checkpoint_every;
+  if (double(steps) * double(sim.step_bytes()) <= o.memory_budget_bytes) return 0;
   const SimGrid& g = sim.grid();
   const double bytes = double(steps + 1) * sim.batch() * 8.0 * (6.0 * g.node_count + 3.0 * g.band_count);
   return bytes <= o.memory_budget_bytes ? 1 : std::max(1, int(std::ceil(std::sqrt(double(steps)))));
@@ -79,20 +81,23 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
     for_each_batch_item(B, item_costs);
   };
 
-  // The forward pass keeps the state on the device between frames (GPU) and checkpoints
-  // every K-th step where the steps run; the state of every step is the checkpoint keyed
-  // by its step number.
+  // The forward pass keeps the state on the device between frames (GPU) and, where the
+  // steps run, either every step whole (K = 0, keyed by the step number: the backward pass
+  // recomputes nothing) or the state after every K-th step (keyed by its step number).
   std::set<int> saved;
   auto checkpoint = [&](int t) {
     sim.save_checkpoint(t);
     saved.insert(t);
   };
   sim.reset();
-  if (options.gradient) checkpoint(0);
+  if (options.gradient && K > 0) checkpoint(0);
   take_frame_costs(0);
   for (int t = 1; t <= steps; ++t) {
-    sim.step(false);
-    if (options.gradient && t % K == 0) checkpoint(t);
+    if (options.gradient && K == 0)
+      sim.step_and_keep(t);
+    else
+      sim.step(false);
+    if (options.gradient && K > 0 && t % K == 0) checkpoint(t);
     if (frames_at.count(t) || t == steps) sim.sync_host();  // also checks for an explosion
     take_frame_costs(t);
   }
@@ -109,18 +114,23 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
   const size_t n3 = 3 * size_t(g.node_count), b3 = 3 * size_t(g.band_count);
   std::vector<std::vector<double>> u_bar(B, std::vector<double>(n3, 0.0)), v_bar(B, std::vector<double>(n3, 0.0));
   for (int t = steps; t >= 1; --t) {
-    if (!saved.count(t - 1)) {  // recompute the checkpoint segment below t from its first state
-      const int base = ((t - 1) / K) * K;
-      sim.load_checkpoint(base);
-      for (int s = base + 1; s < t; ++s) {
-        sim.step(false);
-        checkpoint(s);
+    if (K == 0) {
+      sim.load_step(t);
+      sim.drop_checkpoint(t);
+    } else {
+      if (!saved.count(t - 1)) {  // recompute the checkpoint segment below t from its first state
+        const int base = ((t - 1) / K) * K;
+        sim.load_checkpoint(base);
+        for (int s = base + 1; s < t; ++s) {
+          sim.step(false);
+          checkpoint(s);
+        }
       }
+      sim.load_checkpoint(t - 1);
+      sim.recompute_step();
+      sim.drop_checkpoint(t - 1);  // no later (earlier-step) iteration needs it
+      saved.erase(t - 1);
     }
-    sim.load_checkpoint(t - 1);
-    sim.recompute_step();
-    sim.drop_checkpoint(t - 1);  // no later (earlier-step) iteration needs it
-    saved.erase(t - 1);
     if (gpu) {
       // The state's cotangents stay on the device from step to step; the host adds the
       // frames' seeds where there are any.

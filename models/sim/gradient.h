@@ -1,10 +1,11 @@
 // Cost and exact gradient of the sparse surface constraint over a whole simulation.
 //
-// Forward: every batch item is simulated from its initial state; the states (u, v, band)
-// are stored every checkpoint_every steps, and the cost's cotangents are taken at each
-// observed frame. Backward: for t = T..1 the step is recomputed from state t-1 (recomputed
-// from the last checkpoint when not stored), its ops' adjoints are run in reverse, and
-// the state cotangents flow to step t-1. Parameter gradients accumulate over all steps;
+// Forward: every batch item is simulated from its initial state; every step is kept whole
+// (states and intermediates) where memory allows, else the states (u, v, band) every
+// checkpoint_every steps, all where the steps run (device memory on the GPU); the cost's
+// cotangents are taken at each observed frame. Backward: for t = T..1 the step is loaded
+// or recomputed from state t-1 (recomputed from the last checkpoint when not stored), its
+// ops' adjoints are run in reverse, and the state cotangents flow to step t-1. Parameter gradients accumulate over all steps;
 // the initial velocity's gradient comes from the cotangent of v_0.
 #pragma once
 #include <Eigen/Core>
@@ -39,7 +40,10 @@ struct CostGradient {
 
 struct GradientOptions {
   bool gradient = true;
-  int checkpoint_every = 0;  // 0: every step if the states fit in memory_budget_bytes
+  // 0: every step kept whole (states and intermediates: nothing recomputed) if that fits in
+  // memory_budget_bytes, else every step's state if that fits, else every ceil(sqrt(T))-th
+  // state; k > 0: every k-th state. The memory is the device's on the GPU, else the host's.
+  int checkpoint_every = 0;
   double memory_budget_bytes = 2e9;
 };
 

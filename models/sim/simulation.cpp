@@ -55,8 +55,7 @@ void Simulation::use_gpu(const std::string& real) {
   sync_host();
   gpu_ = std::make_unique<GpuTimestep>(graph_.graph, grid_, batch(), interpreter_->options(), options);
   device_current_ = false;
-  checkpoint_steps_.clear();
-  host_checkpoints_.clear();
+  kept_.clear();
 }
 
 int Simulation::last_cg_iterations(int b) const {
@@ -149,13 +148,18 @@ void Simulation::check_state(int b) const {
                                       steps_, b, worst, worst / extent));
 }
 
-void Simulation::step(bool to_host) {
+void Simulation::step(bool to_host) { advance(to_host, -1); }
+
+void Simulation::step_and_keep(int key) { advance(false, key); }
+
+void Simulation::advance(bool to_host, int keep_key) {
   TensorStore<double>& st = interpreter_->store();
   try {
     if (gpu_) {
       if (!device_current_) gpu_->upload(st);
       device_current_ = false;
       gpu_->run();
+      if (keep_key >= 0) keep(keep_key, step_tensors(), steps_);
       if (to_host)
         for (int t : {graph_.u, graph_.v, graph_.band_u, graph_.cg_iterations})
           if (t >= 0) gpu_->download(st, t);
@@ -165,6 +169,7 @@ void Simulation::step(bool to_host) {
       device_current_ = true;
     } else {
       interpreter_->run();
+      if (keep_key >= 0) keep(keep_key, step_tensors(), steps_);
     }
   } catch (const SimulationError& e) {
     throw SimulationError(fmt::format("step {}: {}", steps_ + 1, e.what()));
@@ -197,38 +202,60 @@ std::vector<int> Simulation::state_tensors() const {
   return t;
 }
 
-void Simulation::save_checkpoint(int key) {
-  if (gpu_) {
-    if (!device_current_) gpu_->upload(interpreter_->store());
-    device_current_ = true;
-    gpu_->save_snapshot(key, state_tensors());
-  } else {
-    std::vector<std::vector<double>>& saved = host_checkpoints_[key];
-    saved.clear();
-    for (int t : state_tensors()) saved.push_back(interpreter_->store().all(t));
-  }
-  checkpoint_steps_[key] = steps_;
+std::vector<int> Simulation::step_tensors() const {
+  std::vector<int> t;
+  for (size_t i = 0; i < graph_.graph.tensors().size(); ++i)
+    if (graph_.graph.tensor(int(i)).role != TensorInfo::Role::Input) t.push_back(int(i));
+  return t;
 }
 
-void Simulation::load_checkpoint(int key) {
-  const auto step = checkpoint_steps_.find(key);
-  if (step == checkpoint_steps_.end()) throw std::logic_error("Simulation: load_checkpoint of a key never saved");
+size_t Simulation::step_bytes() const {
+  size_t bytes = 0;
+  for (int t : step_tensors()) bytes += interpreter_->store().all(t).size() * sizeof(double);
+  return bytes;
+}
+
+// The device must hold the host's state (device_current_) when this runs on the GPU.
+void Simulation::keep(int key, const std::vector<int>& tensors, int step) {
+  Kept& k = kept_[key];
+  k.step = step;
+  k.tensors = tensors;
+  k.host.clear();
+  if (gpu_)
+    gpu_->save_snapshot(key, tensors);
+  else
+    for (int t : tensors) k.host.push_back(interpreter_->store().all(t));
+}
+
+void Simulation::restore(int key) {
+  const auto it = kept_.find(key);
+  if (it == kept_.end()) throw std::logic_error("Simulation: no checkpoint or kept step under this key");
+  const Kept& k = it->second;
   if (gpu_) {
     if (!device_current_) gpu_->upload(interpreter_->store());  // the inputs
-    gpu_->load_snapshot(key, state_tensors());
+    gpu_->load_snapshot(key, k.tensors);
     device_current_ = true;
     host_stale_ = true;
   } else {
-    const std::vector<int> tensors = state_tensors();
-    const std::vector<std::vector<double>>& saved = host_checkpoints_.at(key);
-    for (size_t i = 0; i < tensors.size(); ++i) interpreter_->store().all(tensors[i]) = saved[i];
+    for (size_t i = 0; i < k.tensors.size(); ++i) interpreter_->store().all(k.tensors[i]) = k.host[i];
   }
-  steps_ = step->second;
+  steps_ = k.step;
 }
 
+void Simulation::save_checkpoint(int key) {
+  if (gpu_ && !device_current_) {
+    gpu_->upload(interpreter_->store());
+    device_current_ = true;
+  }
+  keep(key, state_tensors(), steps_);
+}
+
+void Simulation::load_checkpoint(int key) { restore(key); }
+
+void Simulation::load_step(int key) { restore(key); }
+
 void Simulation::drop_checkpoint(int key) {
-  checkpoint_steps_.erase(key);
-  host_checkpoints_.erase(key);
+  kept_.erase(key);
   if (gpu_) gpu_->drop_snapshot(key);
 }
 

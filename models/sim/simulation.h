@@ -49,6 +49,13 @@ class Simulation {
   // accessors below (displacement() and all built on it) throw std::logic_error.
   void step(bool to_host = true);
   void sync_host();
+  // step(false) that also keeps what the step read and computed (its states and
+  // intermediates, all batch items) under key, where the steps run; load_step(key) puts
+  // them back with the state before the step, so that the adjoint of that step can run
+  // without recomputing it. step_bytes(): what one kept step holds.
+  void step_and_keep(int key);
+  void load_step(int key);
+  size_t step_bytes() const;
   int steps_taken() const { return steps_; }
   double dt() const { return dt_; }
 
@@ -77,6 +84,7 @@ class Simulation {
   void recompute_step();
   // Whole-batch state checkpoints under a key (the adjoint's stored steps), kept where the
   // steps run (device memory on the GPU); load_checkpoint restores the state and its step.
+  // drop_checkpoint releases a checkpoint or a kept step.
   void save_checkpoint(int key);
   void load_checkpoint(int key);
   void drop_checkpoint(int key);
@@ -94,7 +102,11 @@ class Simulation {
   void write_inputs(int b);
   void check_state(int b) const;
   void require_host_state() const;
+  void advance(bool to_host, int keep_key);
   std::vector<int> state_tensors() const;  // u_prev, v_prev and, with extension, band_guess
+  std::vector<int> step_tensors() const;   // every state and intermediate tensor
+  void keep(int key, const std::vector<int>& tensors, int step);
+  void restore(int key);
 
   const SimGrid& grid_;
   TimestepGraph graph_;
@@ -106,8 +118,12 @@ class Simulation {
   bool device_current_ = false;
   // The device holds a newer state than the host (step(false), load_checkpoint).
   bool host_stale_ = false;
-  std::map<int, int> checkpoint_steps_;                          // key -> step
-  std::map<int, std::vector<std::vector<double>>> host_checkpoints_;  // key -> state tensors (CPU)
+  struct Kept {
+    int step = 0;
+    std::vector<int> tensors;
+    std::vector<std::vector<double>> host;  // the tensors' values on the CPU path
+  };
+  std::map<int, Kept> kept_;  // checkpoints and kept steps by key
   std::vector<PhysicalParameters> params_;
   std::vector<char> fixed_;
   double dt_, theta_;

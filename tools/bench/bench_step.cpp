@@ -2,7 +2,8 @@
 // forward+adjoint steps on the CPU interpreter; on the GPU (when one is usable) the
 // generated forward step, the generated adjoint step, and a whole 10-step J_SSC
 // gradient evaluation per step (host cost, copies and recomputation included), single
-// and batched. Figures go into docs/benchmarks.md.
+// and batched; one frame's J_SSC with its cotangents on the host. Figures go into
+// docs/benchmarks.md.
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -62,18 +63,22 @@ void BM_CpuForwardStep(benchmark::State& state, const std::string& name) {
 // A 10-step J_SSC evaluation with its full adjoint (forward pass, recomputation, adjoint; the
 // cost on the host) against every other surface point of the body's own 10th step, on the
 // CPU interpreter (gpu_real empty) or the GPU. Per step: the `step_ms` counter.
-void gradient_steps(benchmark::State& state, Body& b, int batch, const std::string& gpu_real) {
-  Simulation sim(b.scene, b.grid, batch, true);
-  if (!gpu_real.empty()) sim.use_gpu(gpu_real);
+// Every other surface point of the body's own 10th step.
+ObservedFrame tenth_step_frame(const Body& b) {
   const DeformedSurface surface(b.grid);
   ObservedFrame frame;
   frame.step = 10;
-  {
-    Simulation ref(b.scene, b.grid, 1, false);
-    for (int i = 0; i < 10; ++i) ref.step();
-    const auto pos = surface.positions(ref.displacement(0));
-    for (size_t i = 0; i < pos.size(); i += 2) frame.points.push_back(pos[i]);
-  }
+  Simulation ref(b.scene, b.grid, 1, false);
+  for (int i = 0; i < 10; ++i) ref.step();
+  const auto pos = surface.positions(ref.displacement(0));
+  for (size_t i = 0; i < pos.size(); i += 2) frame.points.push_back(pos[i]);
+  return frame;
+}
+
+void gradient_steps(benchmark::State& state, Body& b, int batch, const std::string& gpu_real) {
+  Simulation sim(b.scene, b.grid, batch, true);
+  if (!gpu_real.empty()) sim.use_gpu(gpu_real);
+  const ObservedFrame frame = tenth_step_frame(b);
   const SurfaceConstraintCost cost(b.grid, 2 * b.grid.h);
   evaluate_cost_gradient(sim, cost, {frame});  // warm-up (on a GPU: kernels loaded, graphs captured)
   for (auto _ : state) benchmark::DoNotOptimize(evaluate_cost_gradient(sim, cost, {frame}));
@@ -83,6 +88,23 @@ void gradient_steps(benchmark::State& state, Body& b, int batch, const std::stri
 }
 
 void BM_CpuGradientStep(benchmark::State& state, const std::string& name) { gradient_steps(state, body(name), 1, ""); }
+
+// One frame's J_SSC and its cotangents on the host (what a gradient evaluation does per
+// frame and batch item), for the frame of gradient_steps at the state it was taken from.
+void BM_CpuFrameCost(benchmark::State& state, const std::string& name) {
+  Body& b = body(name);
+  const ObservedFrame frame = tenth_step_frame(b);
+  Simulation sim(b.scene, b.grid, 1, true);
+  for (int i = 0; i < 10; ++i) sim.step();
+  const SurfaceConstraintCost cost(b.grid, 2 * b.grid.h);
+  std::vector<double> u_bar(3 * size_t(b.grid.node_count)), band_bar(3 * size_t(b.grid.band_count));
+  FrameCost fc;
+  for (auto _ : state)
+    fc = cost.evaluate(frame.points, 1.0, sim.displacement(0), sim.band_displacement(0), u_bar.data(), band_bar.data());
+  report_size(state, b);
+  state.counters["points"] = fc.points;
+  state.counters["matched"] = fc.matched;
+}
 
 bool gpu_or_skip(benchmark::State& state) {
   const std::string why = gpu_unavailable_reason();
@@ -156,6 +178,8 @@ void register_all() {
         ->Arg(1)->Unit(benchmark::kMillisecond);
     benchmark::RegisterBenchmark(("CpuGradientStep/" + name).c_str(), BM_CpuGradientStep, name)
         ->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(("CpuFrameCost/" + name).c_str(), BM_CpuFrameCost, name)
+        ->Unit(benchmark::kMillisecond)->UseRealTime();
     for (const std::string real : {"double", "float"}) {
       benchmark::RegisterBenchmark(("GpuForwardStep/" + name + "/" + real).c_str(), BM_GpuForwardStep, name, real)
           ->Arg(1)->Arg(8)->Arg(32)->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
