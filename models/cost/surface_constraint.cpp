@@ -21,12 +21,15 @@ Vec3<double> node_point(const SimGrid& g, int kind, long grid_index, const doubl
   return make_vec3(x.x() + d.x, x.y() + d.y, x.z() + d.z);
 }
 
-// Uniform bins over the deformed cells' bounding boxes.
+// Uniform bins over the deformed cells' bounding boxes, and the boxes themselves (a point
+// outside a cell's box is outside the cell: the trilinear image of [0,1]^3 lies in the
+// convex hull of the corners).
 struct BinGrid {
   Eigen::Vector3d lo;
   double size = 1;
   Eigen::Vector3i n;
   std::vector<int> offset, entry;
+  std::vector<Eigen::AlignedBox3d> boxes;  // per cell, grown by a margin for the match slack
 
   bool bin_of(const Eigen::Vector3d& p, long* index) const {
     Eigen::Vector3i b;
@@ -49,6 +52,13 @@ BinGrid build_bins(const std::vector<std::array<Vec3<double>, 8>>& X, double siz
     all.extend(boxes[c]);
   }
   bins.lo = all.min();
+  // The match accepts local coordinates up to 1e-9 outside [0,1]^3; the margin covers that.
+  bins.boxes = boxes;
+  for (Eigen::AlignedBox3d& b : bins.boxes)
+    if (!b.isEmpty()) {
+      const double margin = 1e-6 * (b.sizes().norm() + 1e-3 * size);
+      b.extend(Eigen::Vector3d(b.min().array() - margin)).extend(Eigen::Vector3d(b.max().array() + margin));
+    }
   if (X.empty() || !all.sizes().allFinite()) {  // nothing to match against
     bins.size = size;
     bins.n = Eigen::Vector3i::Ones();
@@ -139,6 +149,7 @@ std::vector<SurfaceConstraintCost::Match> SurfaceConstraintCost::match_points(co
     Match best;
     for (int k = bins.offset[bin]; k < bins.offset[bin + 1]; ++k) {
       const int c = bins.entry[k];
+      if (!bins.boxes[c].contains(points[i])) continue;
       Vec3<double> abc;
       if (!ops::trilinear_inverse(X[c].data(), p, tol, abc)) continue;
       if (abc.x < -slack || abc.x > 1 + slack || abc.y < -slack || abc.y > 1 + slack || abc.z < -slack || abc.z > 1 + slack)
