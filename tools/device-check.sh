@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Builds ssc on a GPU machine (Ubuntu 24.04, CUDA 13, CMake >= 3.20, no network needed)
-# into build-gpu/, runs the code-generator and GPU tests, any benchmark binary, and
-# prints a short summary table last. Usage: tools/device-check.sh [extra gtest filter]
-#   BENCH=regex   only the benchmarks matching it (default: all); BENCH= skips them
+# into build-gpu/, runs the code-generator and GPU tests, the benchmark binary and the
+# end-to-end reconstruction timing (tools/bench/reconstruct-timing.sh), and prints a short
+# summary table last. Usage: tools/device-check.sh [extra gtest filter]
+#   BENCH=regex   only the benchmarks matching it (default: all); BENCH= skips them and the
+#                 reconstruction timing
 set -uo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -39,6 +41,11 @@ if [ -x "$BUILD/bin/ssc_bench" ] && [ -n "$BENCH" ]; then
   bench_rc=${PIPESTATUS[0]}
 fi
 
+if [ -n "$BENCH" ]; then
+  echo "== end-to-end reconstruction (torus demo)"
+  tools/bench/reconstruct-timing.sh "$BUILD" 2>&1 | tee "$LOG/reconstruct.txt"
+fi
+
 echo "== kernel table (ssc kernels)"
 "$BUILD/bin/ssc" kernels "$ROOT/examples/torus.json" --out "$LOG/kernels-torus" 2>&1 | tail -60 | tee "$LOG/kernels.txt"
 
@@ -60,5 +67,6 @@ if [ -f "$LOG/bench.txt" ] && [ "$bench_rc" != "-" ]; then
                printf "  %-34s batch 1 %7s ms  batch 32 %7s ms  (%.1fx)\n", k, t[k, 1], t[k, 32], t[k, 32] / t[k, 1] }' \
       "$LOG/bench.txt" | sort
 fi
+[ -n "$BENCH" ] && grep -E "^reconstruct" "$LOG/reconstruct.txt" | sed 's/^/  /'
 grep -E "ms/launch" "$LOG/kernels.txt" | head -40 | sed 's/^/  /'
 exit "$test_rc"
