@@ -44,7 +44,8 @@ Loaded load() {
                    bind(lib, d.ModuleLoadData, "cuModuleLoadData", w) && bind(lib, d.ModuleUnload, "cuModuleUnload", w) &&
                    bind(lib, d.ModuleGetFunction, "cuModuleGetFunction", w) &&
                    bind(lib, d.FuncGetAttribute, "cuFuncGetAttribute", w) && bind(lib, d.MemAlloc, "cuMemAlloc_v2", w) &&
-                   bind(lib, d.MemFree, "cuMemFree_v2", w) && bind(lib, d.MemcpyHtoD, "cuMemcpyHtoD_v2", w) &&
+                   bind(lib, d.MemFree, "cuMemFree_v2", w) && bind(lib, d.MemGetInfo, "cuMemGetInfo_v2", w) &&
+                   bind(lib, d.MemcpyHtoD, "cuMemcpyHtoD_v2", w) &&
                    bind(lib, d.MemcpyDtoH, "cuMemcpyDtoH_v2", w) &&
                    bind(lib, d.MemcpyDtoD, "cuMemcpyDtoD_v2", w) && bind(lib, d.MemsetD8, "cuMemsetD8_v2", w) &&
                    bind(lib, d.LaunchKernel, "cuLaunchKernel", w) && bind(lib, d.GetErrorString, "cuGetErrorString", w) &&

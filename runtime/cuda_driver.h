@@ -35,6 +35,7 @@ struct Driver {
   Result (*FuncGetAttribute)(int*, int, Function);
   Result (*MemAlloc)(DevicePtr*, size_t);
   Result (*MemFree)(DevicePtr);
+  Result (*MemGetInfo)(size_t*, size_t*);  // free, total
   Result (*MemcpyHtoD)(DevicePtr, const void*, size_t);
   Result (*MemcpyDtoH)(void*, DevicePtr, size_t);
   Result (*MemcpyDtoD)(DevicePtr, DevicePtr, size_t);

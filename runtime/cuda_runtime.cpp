@@ -652,7 +652,13 @@ void GpuTimestep::save_snapshot(int key, const std::vector<int>& tensors) {
       buffer = *spare;
       m.spare_snapshots.erase(spare);
     } else {
-      buffer = m.alloc(bytes);
+      try {
+        buffer = m.alloc(bytes);
+      } catch (const std::runtime_error& e) {
+        throw std::runtime_error(fmt::format("gpu: no device memory for a stored step or checkpoint of {:.1f} MB ({} "
+                                             "held); lower the gradient's memory budget or the batch size ({})",
+                                             bytes / 1e6, m.snapshots.size(), e.what()));
+      }
     }
     it = m.snapshots.emplace(key, buffer).first;
   }
@@ -685,6 +691,14 @@ void GpuTimestep::drop_snapshot(int key) {
   if (it == m.snapshots.end()) return;
   m.spare_snapshots.push_back(it->second);
   m.snapshots.erase(it);
+}
+
+size_t GpuTimestep::free_device_memory() const {
+  const Impl& m = *impl_;
+  cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
+  size_t free = 0, total = 0;
+  cu::check(m.d->MemGetInfo(&free, &total), "cuMemGetInfo");
+  return free;
 }
 
 void GpuTimestep::run() { impl_->run(); }

@@ -98,6 +98,7 @@ class GpuTimestep {
   void save_snapshot(int key, const std::vector<int>& tensors);
   void load_snapshot(int key, const std::vector<int>& tensors);
   void drop_snapshot(int key);
+  size_t free_device_memory() const;  // bytes, as the driver reports them now
 
   // Adjoint of the step that the last run() computed (the forward values stay on the
   // device). clear_adjoints(true) zeroes every cotangent and starts a backward pass;

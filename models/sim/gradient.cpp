@@ -17,12 +17,15 @@ struct FrameSeed {
 };
 
 // 0: every step kept whole (no recomputation); k > 0: the state of every k-th step.
-int choose_checkpoint_interval(const Simulation& sim, int steps, const GradientOptions& o) {
+// On the GPU the budget is at most half the device memory free now.
+int choose_checkpoint_interval(Simulation& sim, int steps, const GradientOptions& o) {
   if (o.checkpoint_every > 0) return o.checkpoint_every;
-  if (double(steps) * double(sim.step_bytes()) <= o.memory_budget_bytes) return 0;
+  double budget = o.memory_budget_bytes;
+  if (sim.gpu()) budget = std::min(budget, 0.5 * double(sim.gpu()->free_device_memory()));
+  if (double(steps) * double(sim.step_bytes()) <= budget) return 0;
   const SimGrid& g = sim.grid();
   const double bytes = double(steps + 1) * sim.batch() * 8.0 * (6.0 * g.node_count + 3.0 * g.band_count);
-  return bytes <= o.memory_budget_bytes ? 1 : std::max(1, int(std::ceil(std::sqrt(double(steps)))));
+  return bytes <= budget ? 1 : std::max(1, int(std::ceil(std::sqrt(double(steps)))));
 }
 
 }  // namespace

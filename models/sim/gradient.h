@@ -42,7 +42,8 @@ struct GradientOptions {
   bool gradient = true;
   // 0: every step kept whole (states and intermediates: nothing recomputed) if that fits in
   // memory_budget_bytes, else every step's state if that fits, else every ceil(sqrt(T))-th
-  // state; k > 0: every k-th state. The memory is the device's on the GPU, else the host's.
+  // state; k > 0: every k-th state. The memory is the device's on the GPU (the budget then at
+  // most half of its free memory), else the host's.
   int checkpoint_every = 0;
   double memory_budget_bytes = 2e9;
 };
