@@ -1,8 +1,10 @@
-// The generated kernels on a GPU against the CPU interpreter (every test here skips
-// without a usable GPU; tools/device-check.sh runs them on the device machine):
+// The generated kernels on a GPU against the CPU interpreter (every test here but the CPU
+// twin of the explosion test skips without a usable GPU; tools/device-check.sh runs them
+// on the device machine):
 //  - GpuForward: one forward step, double and float, every tensor compared; determinism;
 //    the host-driven solves (grid solves off) too; Simulation's steps without the extension;
 //    steps that keep the state on the device, and device checkpoints, against host steps;
+//    an exploding simulation inside a gradient evaluation ends in a SimulationError;
 //  - GpuProfile: per-kernel profile and step times of the torus and the teddy-sized body,
 //    per-kernel times of batches of 32 (teddy-sized, dragon);
 //  - GpuExtension: the extension's one- and two-phase grid solves give the same bits;
@@ -18,6 +20,7 @@
 #include <random>
 
 #include "models/grid/sim_grid.h"
+#include "models/io/errors.h"
 #include "models/sim/body.h"
 #include "models/sim/gradient.h"
 #include "models/sim/simulation.h"
@@ -171,6 +174,32 @@ TEST(GpuForward, DeviceOnlyStepsAndCheckpointsMatchHostSteps) {
     EXPECT_EQ(at3[b], std::vector<double>(device.displacement(b), device.displacement(b) + n));
   device.drop_checkpoint(7);
   EXPECT_THROW(device.load_checkpoint(7), std::logic_error);
+}
+
+// A weightless torus thrown at the ground explodes within a few steps: the gradient's
+// forward pass (on the GPU the state stays on the device between frames) must end in a
+// SimulationError that names a step, on either backend.
+void exploding_gradient_fails_cleanly(bool gpu) {
+  const Scene scene = torus_scene({"material.density=1e-6", "initial.linear_velocity=[0,-20,0]"});
+  const SimGrid grid = build_body_grid(scene);
+  Simulation sim(scene, grid, 1, true);
+  if (gpu) sim.use_gpu();
+  const FrameCostFunction cost = [](size_t, int, const double*, const double*, double*, double*) { return FrameCost(); };
+  try {
+    evaluate_trajectory_gradient(sim, {20, 40}, cost, {});
+    ADD_FAILURE() << "the weightless torus did not fail";
+  } catch (const SimulationError& e) {
+    std::printf("[ %s ] exploding simulation: %s\n", gpu ? "cuda" : "cpu", e.what());
+    EXPECT_NE(std::string(e.what()).find("step "), std::string::npos) << e.what();
+  }
+}
+
+TEST(GpuForward, ExplodingGradientFailsCleanlyOnTheCpu) { exploding_gradient_fails_cleanly(false); }
+
+TEST(GpuForward, ExplodingGradientFailsCleanly) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  exploding_gradient_fails_cleanly(true);
 }
 
 TEST(GpuForward, ReportsMissingGpuCleanly) {
