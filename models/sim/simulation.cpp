@@ -131,21 +131,21 @@ void Simulation::reset() {
   steps_ = 0;
 }
 
-void Simulation::check_state(int b) const {
+void Simulation::check_state(int b, const char* when) const {
   const double* u = displacement(b);
   const double extent = grid_.h * grid_.sdf.size.cast<double>().maxCoeff();
   double worst = 0;
   for (int i = 0; i < 3 * grid_.node_count; ++i) {
     if (!std::isfinite(u[i]))
-      throw SimulationError(fmt::format("step {}: the simulation produced a non-finite displacement (batch item {}); "
+      throw SimulationError(fmt::format("{} {}: the simulation produced a non-finite displacement (batch item {}); "
                                         "lower time.dt or the ground stiffness",
-                                        steps_, b));
+                                        when, steps_, b));
     worst = std::max(worst, std::abs(u[i]));
   }
   if (worst > 1000 * extent)
-    throw SimulationError(fmt::format("step {}: the simulation exploded (batch item {}): a node moved {:.3g} m, "
+    throw SimulationError(fmt::format("{} {}: the simulation exploded (batch item {}): a node moved {:.3g} m, "
                                       "{:.0f} times the grid's size; lower time.dt or the ground stiffness",
-                                      steps_, b, worst, worst / extent));
+                                      when, steps_, b, worst, worst / extent));
 }
 
 void Simulation::step(bool to_host) { advance(to_host, -1); }
@@ -193,7 +193,7 @@ void Simulation::sync_host() {
   TensorStore<double>& st = interpreter_->store();
   for (int t : state_tensors()) gpu_->download(st, t);
   host_stale_ = false;
-  for (int b = 0; b < batch(); ++b) check_state(b);
+  for (int b = 0; b < batch(); ++b) check_state(b, "by step");  // the steps since the last sync ran unchecked
 }
 
 std::vector<int> Simulation::state_tensors() const {
