@@ -88,6 +88,10 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
   // steps run, either every step whole (K = 0, keyed by the step number: the backward pass
   // recomputes nothing) or the state after every K-th step (keyed by its step number).
   std::set<int> saved;
+  struct ReleaseCheckpoints {  // also when a step fails
+    Simulation& sim;
+    ~ReleaseCheckpoints() { sim.clear_checkpoints(); }
+  } release{sim};
   auto checkpoint = [&](int t) {
     sim.save_checkpoint(t);
     saved.insert(t);

@@ -55,7 +55,7 @@ void Simulation::use_gpu(const std::string& real) {
   sync_host();
   gpu_ = std::make_unique<GpuTimestep>(graph_.graph, grid_, batch(), interpreter_->options(), options);
   device_current_ = false;
-  kept_.clear();
+  kept_.clear();  // the old device's snapshots went with it
 }
 
 int Simulation::last_cg_iterations(int b) const {
@@ -257,6 +257,12 @@ void Simulation::load_step(int key) { restore(key); }
 void Simulation::drop_checkpoint(int key) {
   kept_.erase(key);
   if (gpu_) gpu_->drop_snapshot(key);
+}
+
+void Simulation::clear_checkpoints() {
+  if (gpu_)
+    for (const auto& [key, k] : kept_) gpu_->drop_snapshot(key);
+  kept_.clear();
 }
 
 void Simulation::recompute_step() {

@@ -84,10 +84,11 @@ class Simulation {
   void recompute_step();
   // Whole-batch state checkpoints under a key (the adjoint's stored steps), kept where the
   // steps run (device memory on the GPU); load_checkpoint restores the state and its step.
-  // drop_checkpoint releases a checkpoint or a kept step.
+  // drop_checkpoint releases a checkpoint or a kept step, clear_checkpoints all of them.
   void save_checkpoint(int key);
   void load_checkpoint(int key);
   void drop_checkpoint(int key);
+  void clear_checkpoints();
   // The centre of mass the initial spin is taken about.
   const Eigen::Vector3d& spin_center() const { return spin_center_; }
 
