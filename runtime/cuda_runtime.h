@@ -100,8 +100,8 @@ class GpuTimestep {
   void drop_snapshot(int key);
   size_t free_device_memory() const;  // bytes, as the driver reports them now
 
-  // Adjoint of the step that the last run() computed (the forward values stay on the
-  // device). clear_adjoints(true) zeroes every cotangent and starts a backward pass;
+  // Adjoint of the step whose forward values the device holds: those the last run()
+  // computed, or a kept step put back by load_snapshot (the adjoint reads no other state). clear_adjoints(true) zeroes every cotangent and starts a backward pass;
   // clear_adjoints(false), once per step, keeps the inputs' (parameter) cotangents, which
   // accumulate. set_adjoint seeds a tensor's cotangent (all batch items, as the store's
   // layout); get_adjoint reads one back.
