@@ -69,7 +69,7 @@ template <class Real>
 inline void stiffness_apply_cells(const SimGrid& g, const Real* rotation, const Real* weights, Real lambda, Real mu,
                                   const Real* p, Real* corner_out) {
   const Real h = Real(g.h);
-#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
   for (int e = 0; e < g.cell_count; ++e) {
     Vec3<Real> pc[8], y[8];
     ops::load_cell_corners(p, g.cell_nodes.data(), e, pc);
@@ -118,7 +118,7 @@ struct NewmarkSystem {
     const Real h = Real(g.h);
     const long n = 3L * g.node_count;
     std::vector<Real> corner(24 * size_t(g.cell_count)), inv_diag(n), b(n);
-#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
     for (int e = 0; e < g.cell_count; ++e) {
       Vec3<Real> d[8];
       ops::corotated_diagonal(load_rotation(rotation, e), weights.data() + 8 * e, lambda, mu, h, d);

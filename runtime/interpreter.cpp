@@ -100,7 +100,7 @@ void Interpreter<Real>::execute_item(const OpNode& op, int b) {
       Real* rot = a.out("rotation");
       Real* status = a.out("polar_status");
       int degenerate = 0;
-#pragma omp parallel for schedule(static) reduction(+ : degenerate) if (g.cell_count >= kParallelThreshold)
+#pragma omp parallel for schedule(static) reduction(+ : degenerate) if (g.cell_count >= kCellParallelThreshold)
       for (int e = 0; e < g.cell_count; ++e) {
         Vec3<Real> uc[8];
         ops::load_cell_corners(u, g.cell_nodes.data(), e, uc);
@@ -118,7 +118,7 @@ void Interpreter<Real>::execute_item(const OpNode& op, int b) {
       const Real* rot = a.in("rotation");
       const Real lambda = a.scalar("lambda"), mu = a.scalar("mu");
       Real* f = a.out("corner_force");
-#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
       for (int e = 0; e < g.cell_count; ++e) {
         Vec3<Real> fc[8];
         ops::corotation_offset_force(load_rotation(rot, e), weights.data() + 8 * e, lambda, mu, h, fc);

@@ -80,7 +80,7 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       const Real* status = a.out("polar_status");
       const Real* rot_bar = d.out("rotation");
       std::vector<Real> corner(corner_size, Real(0));
-#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
       for (int e = 0; e < g.cell_count; ++e) {
         Vec3<Real> uc[8], ub[8];
         ops::load_cell_corners(u, g.cell_nodes.data(), e, uc);
@@ -100,7 +100,7 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       const Real* f_bar = d.out("corner_force");
       Real* rot_bar = const_cast<Real*>(d.in("rotation"));
       std::vector<Real> lb(g.cell_count), mb(g.cell_count);
-#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
       for (int e = 0; e < g.cell_count; ++e) {
         Vec3<Real> fb[8];
         for (int c = 0; c < 8; ++c) fb[c] = load3(f_bar, 8 * e + c);
@@ -163,7 +163,7 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       const Real* m = a.in("mass");
       const Vec3<Real> grav = load3(a.in("gravity"), 0);
       Real* corner_bar = const_cast<Real*>(d.in("corner_force"));
-#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
       for (int e = 0; e < g.cell_count; ++e)
         for (int c = 0; c < 8; ++c) add3(corner_bar, 8 * e + c, load3(f_bar, g.cell_nodes[8 * e + c]));
       if (a.has_input("point_force")) {
@@ -192,7 +192,7 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       const Real* y_bar = d.out("ku_corner");
       Real* rot_bar = const_cast<Real*>(d.in("rotation"));
       std::vector<Real> corner(corner_size), lb(g.cell_count), mb(g.cell_count);
-#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
       for (int e = 0; e < g.cell_count; ++e) {
         Vec3<Real> pc[8], yb[8], pb[8];
         ops::load_cell_corners(u, g.cell_nodes.data(), e, pc);
@@ -219,7 +219,7 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       const Real *m = a.in("mass"), *u = a.in("u_prev"), *v = a.in("v_prev"), *ku = a.in("ku_corner");
       const Real* r_bar = d.out("rhs");
       Real* ku_bar = const_cast<Real*>(d.in("ku_corner"));
-#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
       for (int e = 0; e < g.cell_count; ++e)
         for (int k = 0; k < 8; ++k) add3(ku_bar, 8 * e + k, c.b_k * load3(r_bar, g.cell_nodes[8 * e + k]));
       Real *m_bar = const_cast<Real*>(d.in("mass")), *u_bar = const_cast<Real*>(d.in("u_prev"));
@@ -260,7 +260,7 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       for (long i = 0; i < n; ++i) rhs_bar[i] += w[i];
       std::vector<Real> corner(corner_size), lb(g.cell_count), mb(g.cell_count), ku(corner_size);
       Real* rot_bar = const_cast<Real*>(d.in("rotation"));
-#pragma omp parallel for schedule(static) if (g.cell_count >= kParallelThreshold)
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
       for (int e = 0; e < g.cell_count; ++e) {
         Vec3<Real> pc[8], yb[8], pb[8], y[8];
         ops::load_cell_corners(u, g.cell_nodes.data(), e, pc);

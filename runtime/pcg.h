@@ -10,8 +10,11 @@
 namespace ssc {
 
 // Loops over fewer elements than this run on one thread: a parallel region costs more than
-// it saves on small grids, and busy-waiting threads stall badly on a loaded machine.
+// it saves on small grids, and busy-waiting threads stall badly on a loaded machine. Vector,
+// node and band-node entries cost a few dozen flops each; a cell (element matrices, a polar
+// decomposition) a few thousand, so cell loops go parallel from far fewer entries.
 constexpr long kParallelThreshold = 8192;
+constexpr long kCellParallelThreshold = 256;
 
 struct PcgResult {
   int iterations = 0;
