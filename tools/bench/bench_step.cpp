@@ -1,7 +1,7 @@
 // Per-step benchmarks for the torus, the dragon and a teddy-sized body: forward and
 // forward+adjoint steps on the CPU interpreter; on the GPU (when one is usable) the
 // generated forward step, the generated adjoint step, and a whole 10-step J_SSC
-// gradient evaluation per step (host cost, copies and recomputation included), single
+// gradient evaluation per step (host cost and copies included), single
 // and batched; one frame's J_SSC with its cotangents on the host. Figures go into
 // docs/benchmarks.md.
 #include <benchmark/benchmark.h>
@@ -60,9 +60,6 @@ void BM_CpuForwardStep(benchmark::State& state, const std::string& name) {
   state.counters["batch"] = double(state.range(0));
 }
 
-// A 10-step J_SSC evaluation with its full adjoint (forward pass, recomputation, adjoint; the
-// cost on the host) against every other surface point of the body's own 10th step, on the
-// CPU interpreter (gpu_real empty) or the GPU. Per step: the `step_ms` counter.
 // Every other surface point of the body's own 10th step.
 ObservedFrame tenth_step_frame(const Body& b) {
   const DeformedSurface surface(b.grid);
@@ -75,6 +72,9 @@ ObservedFrame tenth_step_frame(const Body& b) {
   return frame;
 }
 
+// A 10-step J_SSC evaluation with its full adjoint (forward pass, adjoint; the cost on the
+// host) against tenth_step_frame, on the CPU interpreter (gpu_real empty) or the GPU. Per
+// step: the `step_ms` counter.
 void gradient_steps(benchmark::State& state, Body& b, int batch, const std::string& gpu_real) {
   Simulation sim(b.scene, b.grid, batch, true);
   if (!gpu_real.empty()) sim.use_gpu(gpu_real);
