@@ -26,6 +26,7 @@
 #include "models/sim/simulation.h"
 #include "runtime/cuda_runtime.h"
 #include "tests/gpu_test_support.h"
+#include "tests/synthetic_frame_cost.h"
 
 namespace ssc {
 namespace {
@@ -390,19 +391,7 @@ TEST(GpuAdjoint, TrajectoryGradientMatchesInterpreter) {
   test_cache_root();
   const Scene scene = torus_scene({"solver.tolerance=1e-12", "solver.extension_tolerance=1e-13"});
   const SimGrid grid = build_body_grid(scene);
-  const FrameCostFunction cost = [&](size_t f, int, const double* u, const double* band, double* ub, double* bb) {
-    FrameCost c;
-    for (int i = 0; i < 3 * grid.node_count; ++i) {
-      const double w = std::sin(0.37 * i + double(f));
-      c.cost += w * u[i];
-      if (ub) ub[i] += w;
-    }
-    for (int i = 0; i < 3 * grid.band_count; ++i) {
-      c.cost += 0.5 * band[i] * band[i];
-      if (bb) bb[i] += band[i];
-    }
-    return c;
-  };
+  const FrameCostFunction cost = synthetic_frame_cost(grid);
   // CPU and GPU with state checkpoints every 5 steps (recomputed segments); the GPU again
   // with every step kept whole on the device (the default for short runs).
   GradientOptions checkpoints, whole;

@@ -41,6 +41,7 @@
 #include "models/sim/gradient.h"
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
+#include "tests/synthetic_frame_cost.h"
 
 namespace ssc {
 namespace {
@@ -344,19 +345,7 @@ TEST(GradientPipeline, CheckpointingGivesTheSameGradient) {
 TEST(GradientPipeline, ThreadCountDoesNotChangeTheBits) {
   const Scene scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/torus.json");
   const SimGrid grid = build_body_grid(scene);
-  const FrameCostFunction cost = [&](size_t f, int, const double* u, const double* band, double* ub, double* bb) {
-    FrameCost c;
-    for (int i = 0; i < 3 * grid.node_count; ++i) {
-      const double w = std::sin(0.37 * i + double(f));
-      c.cost += w * u[i];
-      if (ub) ub[i] += w;
-    }
-    for (int i = 0; i < 3 * grid.band_count; ++i) {
-      c.cost += 0.5 * band[i] * band[i];
-      if (bb) bb[i] += band[i];
-    }
-    return c;
-  };
+  const FrameCostFunction cost = synthetic_frame_cost(grid);
   std::vector<double> gradient[2], state[2];
   for (int run = 0; run < 2; ++run) {
     const ScopedOmpThreads threads(run == 0 ? 1 : 2);
