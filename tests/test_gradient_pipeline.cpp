@@ -1,6 +1,6 @@
 // The whole-simulation gradient (models/sim/gradient.h, evaluate_cost_gradient) against
-// central finite differences of the implemented cost, per parameter (the test pyramid's
-// level v, engine-lessons.md lesson 16), plus checkpointing, batching and determinism.
+// central finite differences of the implemented cost, per parameter (level v of the test
+// pyramid, docs/decisions.md E3), plus checkpointing, batching and determinism.
 //
 // Scene: a sphere (radius 0.3 m, cells 0.1 m) spinning and translating onto a tilted
 // ground plane, with gravity, Rayleigh damping, corotation, soft-min contact and the

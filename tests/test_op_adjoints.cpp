@@ -1,5 +1,5 @@
-// Adjoints of the op bodies in ops/ (the test pyramid's level ii, engine-lessons.md lesson
-// 16) and the implicit ops' properties (level iv, lessons 7 and 8).
+// Adjoints of the op bodies in ops/ (level ii of the test pyramid, docs/decisions.md E3) and
+// the implicit ops' properties (level iv; docs/decisions.md E1 and E2).
 //
 // OpAdjoint*: for every op with an adj_ function, on random physically sensible inputs
 // and several seeds, in double:

@@ -578,7 +578,7 @@ TEST(PhysicsBounce, PenetrationIsBoundedAndEnergyDecreases) {
 
 TEST(PhysicsGrid, DragonMatchesThePapersCounts) {
   json j;
-  j["object"] = {{"sdf_file", std::string(SSC_SHARED_DIR) + "/data/sdf/dragon_modified_rot.sdf"}};
+  j["object"] = {{"sdf_file", std::string(SSC_TEST_DATA_DIR) + "/dragon_modified_rot.sdf"}};
   j["grid"] = {{"zero_cutoff", 0.1}, {"band_width", 0}};
   const Scene scene = scene_from(j);
   const SimGrid grid = build_body_grid(scene);

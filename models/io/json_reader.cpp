@@ -3,7 +3,9 @@
 
 #include <fmt/format.h>
 
+#include <cerrno>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -159,6 +161,19 @@ void apply_override(json& config, const std::string& assignment, const std::stri
     throw InputError(fmt::format("--set {}: expected KEY=VALUE, e.g. --set material.youngs_modulus=3000", assignment));
   const std::string key = assignment.substr(0, eq), text = assignment.substr(eq + 1);
   json value;
+  {
+    // NaN, infinities and numbers beyond the double range are not JSON; say so, not "a string".
+    std::string lower;
+    for (char ch : text) lower += char(std::tolower(static_cast<unsigned char>(ch)));
+    const std::string bare = lower.empty() || (lower[0] != '-' && lower[0] != '+') ? lower : lower.substr(1);
+    char* end = nullptr;
+    errno = 0;
+    const double d = std::strtod(text.c_str(), &end);
+    const bool numeric = !text.empty() && end == text.c_str() + text.size();
+    if (bare == "nan" || bare == "inf" || bare == "infinity" || (numeric && (!std::isfinite(d) || errno == ERANGE)))
+      throw InputError(fmt::format("--set {}={}: not a finite number; give a value within +-1.8e308 (NaN and infinity "
+                                   "are refused)", key, text));
+  }
   try {
     value = json::parse(text);
   } catch (const json::exception&) {
@@ -189,6 +204,9 @@ void apply_override(json& config, const std::string& assignment, const std::stri
 }
 
 json read_json_file(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InputError(fmt::format("{}: is a folder, not a file; give the path of the JSON file", path));
   std::ifstream in(path);
   if (!in) throw InputError(fmt::format("{}: cannot open the file (does it exist and is it readable?)", path));
   std::stringstream buffer;

@@ -1,25 +1,55 @@
-// An output folder that appears complete or not at all: everything is written into a
-// sibling temporary folder, which replaces the target only when commit() is called.
-// Destroying an uncommitted OutputDir removes the temporary folder.
+// An output folder that ssc owns, that appears complete or not at all, and that no user
+// file is ever lost to.
+//
+// Ownership: a folder is ssc's only if it holds a manifest, ssc.json, with "ssc_output":
+// true. The constructor refuses a target that is a file, a link, a folder with content but
+// no manifest, the filesystem root, the home folder, the working folder or one of its
+// parents, or a parent of (or the same path as) a protected input (the scene, the
+// observations). An empty folder is taken (nothing in it can be lost).
+// Atomicity: everything is written into the sibling NAME.tmp-PID, which holds its
+// manifest (status "running") from the start. commit() writes the final manifest and swaps
+// the folder into place with renameat2(RENAME_EXCHANGE) (the old one is then removed), or,
+// where the filesystem cannot exchange, by renaming the old folder aside first.
+// Concurrency: an flock on NAME.lock keeps two runs off one target; the lock file is
+// removed at the end. A stale NAME.tmp-PID or NAME.old-PID of a process that no longer
+// runs is removed by the next run for the same target.
+// Interruption: every unfinished temporary folder and lock is registered, and
+// remove_unfinished_outputs() (called on SIGINT/SIGTERM, tools/ssc/interrupts.h) removes them.
 #pragma once
+#include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 namespace ssc {
 
 class OutputDir {
  public:
-  explicit OutputDir(const std::string& target);
+  // protected_inputs: paths the output may not be (or contain).
+  explicit OutputDir(const std::string& target, const std::vector<std::string>& protected_inputs = {});
   ~OutputDir();
   OutputDir(const OutputDir&) = delete;
   OutputDir& operator=(const OutputDir&) = delete;
 
   const std::string& path() const { return temp_; }  // write here
   std::string file(const std::string& relative) const;
+  // What the command adds to ssc.json (scene, observations, device, warnings, ...).
+  nlohmann::json& manifest() { return manifest_; }
   void commit();
 
  private:
-  std::string target_, temp_;
+  void write_manifest(const std::string& status) const;
+  std::string target_, temp_, lock_;
+  int lock_fd_ = -1;
   bool committed_ = false;
+  nlohmann::json manifest_ = nlohmann::json::object();
 };
+
+// The manifest's file name and its ownership check (true if `folder` holds one of ssc's).
+inline constexpr const char* kManifestName = "ssc.json";
+bool is_ssc_output(const std::string& folder);
+
+// Removes every temporary folder and lock that a running OutputDir holds. Safe to call from
+// the signal-handling thread while the main thread is still writing.
+void remove_unfinished_outputs();
 
 }  // namespace ssc

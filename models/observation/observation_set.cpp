@@ -18,6 +18,7 @@
 #include <sstream>
 
 #include "models/io/errors.h"
+#include "models/io/output_dir.h"
 
 namespace ssc {
 
@@ -184,21 +185,6 @@ std::vector<std::string> patterns_or_default(const ObservationSet& set) {
 
 // ---- writing -------------------------------------------------------------------------
 
-fs::path normalized_dir(const std::string& dir) {
-  if (dir.empty()) throw InputError("write_observations: empty folder name");
-  fs::path p = fs::path(dir).lexically_normal();
-  if (!p.has_filename()) p = p.parent_path();  // "obs/" -> "obs"
-  if (p.empty() || p.filename() == "." || p.filename() == "..")
-    throw InputError(fmt::format("{}: give the observation folder by name (not '.' or '..')", dir));
-  return p;
-}
-
-fs::path with_suffix(const fs::path& p, const std::string& tag) {
-  fs::path out = p;
-  out += fmt::format(".{}-{}", tag, long(::getpid()));
-  return out;
-}
-
 nlohmann::ordered_json camera_json(const DepthCamera& cam, const std::string& pattern) {
   nlohmann::ordered_json pose = nlohmann::ordered_json::array();
   for (int r = 0; r < 4; ++r)
@@ -240,42 +226,6 @@ void write_frames(const fs::path& folder, const ObservationSet& set, const std::
       if (ec) throw InputError(fmt::format("{}: cannot create folder ({})", file.parent_path().string(), ec.message()));
       write_depth_png(file.string(), set.frames[f][i], set.depth_scale);
     }
-}
-
-void make_fresh_dir(const fs::path& p) {
-  std::error_code ec;
-  fs::remove_all(p, ec);
-  if (!ec) fs::create_directories(p, ec);
-  if (ec) throw InputError(fmt::format("{}: cannot create the temporary folder ({}); check that the parent "
-                                       "folder is writable", p.string(), ec.message()));
-}
-
-// An existing target is replaced only if it is an observation folder or empty.
-void check_replaceable(const fs::path& target) {
-  std::error_code ec;
-  if (!fs::exists(target, ec)) return;
-  if (!fs::is_directory(target, ec))
-    throw InputError(fmt::format("{}: exists and is not a folder; choose another output path", target.string()));
-  if (fs::exists(target / "cameras.json", ec) || fs::is_empty(target, ec)) return;
-  throw InputError(fmt::format("{}: exists and is not an observation folder (no cameras.json); refusing to "
-                               "replace it: choose another output path or delete it", target.string()));
-}
-
-void swap_into_place(const fs::path& tmp, const fs::path& target) {
-  std::error_code ec;
-  const fs::path old = with_suffix(target, "old");
-  const bool had_old = fs::exists(target, ec);
-  if (had_old) {
-    fs::remove_all(old, ec);
-    fs::rename(target, old, ec);
-    if (ec) throw InputError(fmt::format("{}: cannot move the existing folder aside ({})", target.string(), ec.message()));
-  }
-  fs::rename(tmp, target, ec);
-  if (ec) {
-    if (had_old) fs::rename(old, target, ec);
-    throw InputError(fmt::format("{}: cannot rename the written folder {} into place", target.string(), tmp.string()));
-  }
-  if (had_old) fs::remove_all(old, ec);
 }
 
 // ---- reading -------------------------------------------------------------------------
@@ -427,22 +377,18 @@ void validate_observations(const ObservationSet& set, const std::string& where) 
   validate_with_patterns(set, patterns_or_default(set), where);
 }
 
-void write_observations(const std::string& dir, const ObservationSet& set) {
-  const fs::path target = normalized_dir(dir);
+void write_observation_files(const std::string& folder, const ObservationSet& set) {
   const std::vector<std::string> patterns = patterns_or_default(set);
-  validate_with_patterns(set, patterns, fmt::format("write_observations({})", target.string()));
-  check_replaceable(target);
-  const fs::path tmp = with_suffix(target, "tmp");
-  make_fresh_dir(tmp);
-  try {
-    write_header(tmp, set, patterns);
-    write_frames(tmp, set, patterns);
-  } catch (...) {
-    std::error_code ec;
-    fs::remove_all(tmp, ec);
-    throw;
-  }
-  swap_into_place(tmp, target);
+  validate_with_patterns(set, patterns, fmt::format("write_observations({})", folder));
+  write_header(folder, set, patterns);
+  write_frames(folder, set, patterns);
+}
+
+void write_observations(const std::string& dir, const ObservationSet& set) {
+  validate_with_patterns(set, patterns_or_default(set), fmt::format("write_observations({})", dir));
+  OutputDir out(dir);
+  write_observation_files(out.path(), set);
+  out.commit();
 }
 
 ObservationSet read_observations(const std::string& dir) {

@@ -48,13 +48,12 @@ std::string depth_file_name(const std::string& pattern, int frame, const std::st
 // [min_depth, max_depth]. Throws InputError naming `where`.
 void validate_observations(const ObservationSet& set, const std::string& where);
 
-// Writes the set into `dir`, atomically as seen from readers: everything is written into
-// the sibling folder dir + ".tmp-<pid>" first; only when that is complete, an existing
-// `dir` is moved aside to dir + ".old-<pid>", the new folder renamed to `dir`, and the old
-// one removed. An existing `dir` is replaced only if it is an observation folder (holds a
-// cameras.json) or empty; anything else is refused. Empty depth_patterns means default
-// patterns. Depths are quantised to depth_scale on disk.
+// Writes the set into `dir` as an ssc output folder (models/io/output_dir.h): atomically,
+// with a manifest, replacing only a folder an earlier ssc run made (or an empty one).
+// Empty depth_patterns means default patterns. Depths are quantised to depth_scale on disk.
 void write_observations(const std::string& dir, const ObservationSet& set);
+// The files alone (cameras.json and the PNGs) into an existing folder (an OutputDir's).
+void write_observation_files(const std::string& folder, const ObservationSet& set);
 
 // Reads and checks a folder written by write_observations or by a converter of a real
 // recording. Every problem (missing cameras.json, malformed JSON, missing keys, wrong

@@ -190,8 +190,15 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
       Eigen::VectorXd g(space.size());
       for (int i = 0; i < space.size(); ++i) g[i] = parameter_gradient(values[k].gradient, with_values(base, result.names, points[k]), result.names[i]);
       const int before = opt[active[k]]->iterations();
-      opt[active[k]]->tell(values[k].cost, o.finite_differences ? fd_gradient[k]
-                                                                : space.gradient_to_internal(opt[active[k]]->ask(), g));
+      const Eigen::VectorXd internal_gradient =
+          o.finite_differences ? fd_gradient[k] : space.gradient_to_internal(opt[active[k]]->ask(), g);
+      if (rec.initial_gradient_norm < 0) rec.initial_gradient_norm = internal_gradient.norm();
+      if (values[k].cost < opt[active[k]]->best_cost()) {
+        rec.matched_points = rec.observed_points = 0;
+        for (const FrameCost& f : values[k].frames) rec.matched_points += f.matched, rec.observed_points += f.points;
+        rec.final_gradient_norm = internal_gradient.norm();
+      }
+      opt[active[k]]->tell(values[k].cost, internal_gradient);
       if (opt[active[k]]->iterations() != before || rec.cost_history.empty()) {
         rec.cost_history.push_back(values[k].cost);
         rec.parameter_history.push_back(points[k]);

@@ -8,6 +8,10 @@
 #include "models/geometry/primitives.h"
 #include "models/geometry/sdf_file.h"
 #include "models/io/errors.h"
+#include "models/io/run_record.h"
+
+#include <cmath>
+#include <map>
 
 namespace ssc {
 
@@ -34,9 +38,54 @@ SdfGrid build_rest_sdf(const Scene& scene) {
   throw InputError(scene.file + ": unknown object kind");
 }
 
+double primitive_volume(const Primitive& p) {
+  constexpr double kPi = 3.14159265358979323846;
+  const double s3 = std::pow(p.transform.scale, 3);
+  switch (p.type) {
+    case PrimitiveType::Sphere:
+      return s3 * 4.0 / 3.0 * kPi * std::pow(p.radius, 3);
+    case PrimitiveType::Box:
+      return s3 * 8 * p.half_extents.prod();
+    case PrimitiveType::Torus:
+      return s3 * 2 * kPi * kPi * p.major_radius * p.minor_radius * p.minor_radius;
+    case PrimitiveType::Capsule:
+      return s3 * (kPi * p.radius * p.radius * 2 * p.half_length + 4.0 / 3.0 * kPi * std::pow(p.radius, 3));
+  }
+  return 0;
+}
+
+// The enclosed volume of a closed mesh (divergence theorem), or 0 for an open one.
+static double closed_mesh_volume(const TriangleMesh& mesh, double scale) {
+  std::map<std::pair<int, int>, int> edges;
+  double v = 0;
+  for (const Eigen::Vector3i& f : mesh.faces) {
+    for (int e = 0; e < 3; ++e) ++edges[std::minmax(f[e], f[(e + 1) % 3])];
+    v += mesh.vertices[f[0]].dot(mesh.vertices[f[1]].cross(mesh.vertices[f[2]])) / 6;
+  }
+  for (const auto& [edge, count] : edges)
+    if (count != 2) return 0;
+  return std::abs(v) * std::pow(scale, 3);
+}
+
 SimGrid build_body_grid(const Scene& scene) {
   const std::string source = scene.object.path.empty() ? scene.file + ": object" : scene.object.path;
-  return build_sim_grid(build_rest_sdf(scene), scene.grid, source);
+  SimGrid grid = build_sim_grid(build_rest_sdf(scene), scene.grid, source);
+  double reference = 0;
+  if (scene.object.kind == ObjectSpec::Kind::Primitive) reference = primitive_volume(scene.object.primitive);
+  if (scene.object.kind == ObjectSpec::Kind::Mesh) reference = closed_mesh_volume(load_mesh(scene.object.path), scene.object.transform.scale);
+  if (reference > 0) {
+    const double lost = 1 - grid.total_volume / reference;
+    const std::string what = fmt::format(
+        "{}: the simulation grid (cell size {:.3g} m) holds {:.1f} % of the object's volume ({:.4g} of {:.4g} m^3): "
+        "the cells are too coarse for the shape",
+        scene.file, grid.h, 100 * grid.total_volume / reference, grid.total_volume, reference);
+    if (lost > kVolumeLossError)
+      throw InputError(what + fmt::format("; the mass and stiffness would be wrong. Lower grid.cell_size or raise grid.resolution "
+                                          "(ssc refuses a grid that loses more than {:.0f} %)", 100 * kVolumeLossError));
+    if (std::abs(lost) > kVolumeLossWarning)
+      warn("grid_volume", what + "; masses are off by as much. Lower grid.cell_size or raise grid.resolution");
+  }
+  return grid;
 }
 
 }  // namespace ssc

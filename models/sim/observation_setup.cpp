@@ -74,7 +74,8 @@ ObservationSpec parse_observation_spec(const Scene& scene) {
 
 ObservationSet render_observations(const Scene& scene, const SimGrid& grid, const ObservationSpec& spec,
                                    const std::function<void(int, int)>& progress,
-                                   const std::function<void(Simulation&)>& configure) {
+                                   const std::function<void(Simulation&)>& configure,
+                                   const std::function<void(const Simulation&)>& finished) {
   Simulation sim(scene, grid);
   if (configure) configure(sim);
   const DeformedSurface surface(grid);
@@ -95,6 +96,7 @@ ObservationSet render_observations(const Scene& scene, const SimGrid& grid, cons
     if (progress) progress(f + 1, frames);
   }
   set.frame_count = frames;
+  if (finished) finished(sim);
   return set;
 }
 

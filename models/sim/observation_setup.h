@@ -29,10 +29,12 @@ struct ObservationSpec {
 ObservationSpec parse_observation_spec(const Scene& scene);
 
 // Simulates the scene and renders every camera at every observed step.
-// `configure` may place the simulation on a device before it runs.
+// `configure` may place the simulation on a device before it runs; `finished` sees it
+// after the last step (for the run's warnings).
 ObservationSet render_observations(const Scene& scene, const SimGrid& grid, const ObservationSpec& spec,
                                    const std::function<void(int, int)>& progress = {},
-                                   const std::function<void(Simulation&)>& configure = {});
+                                   const std::function<void(Simulation&)>& configure = {},
+                                   const std::function<void(const Simulation&)>& finished = {});
 
 // Observed world points per frame, each mapped to the simulation step it shows;
 // InputError (naming dir) if the frame times do not fall on simulation steps or a frame

@@ -75,25 +75,112 @@ std::vector<std::string> all_parameter_names(const PhysicalParameters& p) {
   return names;
 }
 
+namespace {
+
+// The parameter name of a scene-key spelling, or the name itself.
+std::string canonical_parameter_name(const std::string& name) {
+  const std::string material = "material.";
+  if (name.rfind(material, 0) == 0) {
+    PhysicalParameters probe;
+    if (scalar_field(probe, name.substr(material.size()))) return name.substr(material.size());
+  }
+  const std::string first_plane = "ground.planes[0].";
+  if (name.rfind(first_plane, 0) == 0) return "ground." + name.substr(first_plane.size());
+  return name;
+}
+
+}  // namespace
+
 std::vector<std::string> expand_parameter_names(const std::vector<std::string>& names, const PhysicalParameters& p) {
   const std::vector<std::string> all = all_parameter_names(p);
   std::vector<std::string> out;
-  for (const std::string& n : names) {
+  for (const std::string& given : names) {
+    const std::string n = canonical_parameter_name(given);
     PhysicalParameters copy = p;
+    std::vector<std::string> expanded;
     if (vector_field(copy, n)) {
-      for (const char* a : kAxes) out.push_back(n + "." + a);
-      continue;
-    }
-    if (std::find(all.begin(), all.end(), n) == all.end()) {
+      for (const char* a : kAxes) expanded.push_back(n + "." + a);
+    } else if (std::find(all.begin(), all.end(), n) == all.end()) {
       std::string list;
       for (const std::string& a : all) list += (list.empty() ? "" : ", ") + a;
       throw InputError(fmt::format("unknown parameter '{}'; the scene's parameters are: {} (and gravity, "
                                    "initial.linear_velocity, initial.angular_velocity for all three components)",
-                                   n, list));
+                                   given, list));
+    } else {
+      expanded.push_back(n);
     }
-    out.push_back(n);
+    for (const std::string& e : expanded) {
+      if (std::find(out.begin(), out.end(), e) != out.end())
+        throw InputError(fmt::format("parameter '{}' is named twice (as '{}'); name each parameter once", e, given));
+      out.push_back(e);
+    }
   }
   return out;
+}
+
+bool apply_parameter_override(nlohmann::json& config, const std::string& given, const nlohmann::json& value,
+                              const std::string& file) {
+  const std::string name = canonical_parameter_name(given);
+  PhysicalParameters probe;
+  int axis = 0;
+  const bool scalar = scalar_field(probe, name) != nullptr;
+  const bool component = vector_component(probe, name, &axis) != nullptr;
+  const bool plane = name.rfind("ground.", 0) == 0 && name != "ground.height" &&
+                     (name.find("polar_deg") != std::string::npos || name.find("azimuth_deg") != std::string::npos ||
+                      name.rfind("ground.planes[", 0) == 0);
+  if (!scalar && !component && !plane) return false;
+  if (!value.is_number())
+    throw InputError(fmt::format("--set {}: must be a number, found {}", given, value.dump()));
+  const double x = value.get<double>();
+  if (const std::string why = parameter_value_error(name, x); !why.empty())
+    throw InputError(fmt::format("--set {}={}: {}", given, value.dump(), why));
+  if (scalar) {
+    config["material"][name] = x;
+    return true;
+  }
+  PhysicalParameters p = PhysicalParameters::from_scene(parse_scene(config, file));
+  if (!plane) {
+    set_parameter(p, name, x);
+    const Eigen::Vector3d* v = vector_component(p, name, &axis);
+    const std::string base = name.substr(0, name.rfind('.'));
+    nlohmann::json& node = base == "gravity" ? config["gravity"] : config["initial"][base.substr(base.find('.') + 1)];
+    node = {(*v)[0], (*v)[1], (*v)[2]};
+    return true;
+  }
+  size_t k;
+  std::string field;
+  if (!parse_plane_name(name, p.planes.size(), &k, &field))
+    throw InputError(fmt::format("--set {}: {}: the scene has {} ground plane(s) (ground.planes[0..{}]), and the plane "
+                                 "parameters are height, polar_deg and azimuth_deg", given, file, p.planes.size(),
+                                 int(p.planes.size()) - 1));
+  set_parameter(p, name, x);
+  nlohmann::json& node = config["ground"].contains("planes") ? config["ground"]["planes"][k] : config["ground"];
+  if (field == "height") {
+    node["height"] = x;
+  } else {
+    double polar, azimuth;
+    plane_angles(p.planes[k], &polar, &azimuth);
+    node.erase("normal");
+    node["angles_deg"] = {polar, azimuth};
+  }
+  return true;
+}
+
+std::string parameter_set_argument(const PhysicalParameters& p, const std::string& name, double value) {
+  // The first plane's height is the scene key ground.height only without a planes list.
+  const std::string key = name == "ground.height" && p.planes.size() > 1 ? "ground.planes[0].height" : name;
+  return fmt::format("{}={:.17g}", key, value);
+}
+
+std::string parameter_value_error(const std::string& name, double value) {
+  if (!std::isfinite(value)) return "must be a finite number";
+  const std::string n = canonical_parameter_name(name);
+  if ((n == "youngs_modulus" || n == "density") && !(value > 0)) return fmt::format("must be positive, found {:g}", value);
+  if ((n == "mass_damping" || n == "stiffness_damping") && value < 0) return fmt::format("must not be negative, found {:g}", value);
+  if (n == "poisson_ratio" && !(value > 0 && value < 0.5)) return fmt::format("must be in (0, 0.5), found {:g}", value);
+  if (n.size() > 9 && n.compare(n.size() - 9, 9, "polar_deg") == 0 && !(value >= 0 && value <= 180))
+    return fmt::format("must be in [0, 180] degrees, found {:g}", value);
+  return "";
 }
 
 double get_parameter(const PhysicalParameters& p, const std::string& name) {

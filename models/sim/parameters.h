@@ -6,6 +6,7 @@
 // (the normal is (sin p cos a, cos p, sin p sin a)). Vector names without a component
 // ("gravity") expand to their three components.
 #pragma once
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -15,8 +16,23 @@
 namespace ssc {
 
 std::vector<std::string> all_parameter_names(const PhysicalParameters& p);
-// Expands "gravity" to its components and checks every name; InputError listing the valid ones.
+// Expands "gravity" to its components, maps the scene-key spelling of a material parameter
+// ("material.youngs_modulus") and of the first plane ("ground.planes[0].height") to the
+// parameter name, and checks every name; InputError listing the valid ones, or naming a
+// parameter given twice.
 std::vector<std::string> expand_parameter_names(const std::vector<std::string>& names, const PhysicalParameters& p);
+
+// `--set NAME=VALUE` with a parameter name that is not itself a scene key (youngs_modulus,
+// gravity.y, initial.linear_velocity.x, ground.polar_deg, ground.planes[k].height, ...):
+// writes the value into the scene config under its scene key (material.youngs_modulus,
+// gravity[1], ground.angles_deg, ...). False if NAME is no such parameter name.
+bool apply_parameter_override(nlohmann::json& config, const std::string& name, const nlohmann::json& value,
+                              const std::string& file);
+// A `--set` argument that gives the parameter this value: what result.json lists under
+// "set", so that a fit can be fed back into any command.
+std::string parameter_set_argument(const PhysicalParameters& p, const std::string& name, double value);
+// Empty if the parameter may take this value, else why not (E > 0, 0 < nu < 0.5, ...).
+std::string parameter_value_error(const std::string& name, double value);
 
 double get_parameter(const PhysicalParameters& p, const std::string& name);
 void set_parameter(PhysicalParameters& p, const std::string& name, double value);

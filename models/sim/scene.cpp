@@ -8,6 +8,7 @@
 
 #include "models/io/errors.h"
 #include "models/io/json_reader.h"
+#include "models/sim/parameters.h"
 
 namespace ssc {
 namespace {
@@ -203,6 +204,7 @@ Scene parse_scene(const nlohmann::json& config, const std::string& file) {
     s.solver.max_iterations = v.integer("max_iterations", s.solver.max_iterations);
     v.require(s.solver.max_iterations > 0, "max_iterations", "must be positive");
     s.solver.extension_tolerance = v.positive("extension_tolerance", v.number("extension_tolerance", s.solver.extension_tolerance));
+    s.solver.energy_tolerance = v.non_negative("energy_tolerance", v.number("energy_tolerance", s.solver.energy_tolerance));
     v.reject_unknown_keys();
   }
   for (const char* section : {"observation", "units", "name", "description"})
@@ -213,8 +215,23 @@ Scene parse_scene(const nlohmann::json& config, const std::string& file) {
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
   nlohmann::json config = read_json_file(path);
-  for (const std::string& o : overrides) apply_override(config, o, path);
-  return parse_scene(config, path);
+  for (const std::string& o : overrides) {
+    // A parameter name (youngs_modulus, gravity.y, ...) is written under its scene key.
+    const size_t eq = o.find('=');
+    if (eq != std::string::npos && eq > 0) {
+      nlohmann::json value;
+      try {
+        value = nlohmann::json::parse(o.substr(eq + 1));
+      } catch (const nlohmann::json::exception&) {
+        value = nullptr;
+      }
+      if (value.is_number() && apply_parameter_override(config, o.substr(0, eq), value, path)) continue;
+    }
+    apply_override(config, o, path);
+  }
+  Scene scene = parse_scene(config, path);
+  scene.resolved = config;
+  return scene;
 }
 
 }  // namespace ssc

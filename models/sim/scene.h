@@ -52,6 +52,7 @@ struct SolverSpec {
   double tolerance = 1e-8;
   int max_iterations = 2000;
   double extension_tolerance = 1e-8;
+  double energy_tolerance = 0.05;  // energy audit (models/sim/run_audit.h); 0 turns it off
 };
 
 struct Scene {
@@ -68,7 +69,8 @@ struct Scene {
   std::vector<DirichletBox> dirichlet;
   TimeSpec time;
   SolverSpec solver;
-  nlohmann::json extra;  // sections read by other commands (observation, ...)
+  nlohmann::json extra;     // sections read by other commands (observation, ...)
+  nlohmann::json resolved;  // the file's JSON with every --set applied (for manifests)
 };
 
 // Reads and validates a scene; overrides are "dotted.key=JSON" applied before parsing.

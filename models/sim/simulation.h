@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "models/grid/sim_grid.h"
+#include "models/sim/run_audit.h"
 #include "models/sim/scene.h"
 #include "models/sim/timestep_graph.h"
 #include "runtime/interpreter.h"
@@ -69,6 +70,11 @@ class Simulation {
   Eigen::Vector3d angular_momentum(int b) const;  // about the origin
   double kinetic_energy(int b) const;
   double elastic_energy(int b) const;
+  double gravitational_energy(int b) const;  // -m g . x, zero at the origin
+  double contact_energy(int b) const;        // the soft-min penalty's potential (ops/collision.h)
+  int inverted_cell_count(int b) const;      // cells with det F <= 0 at their centre
+  // The run's sanity checks and what they saw (models/sim/run_audit.h).
+  const SimulationAudit& audit(int b) const { return audits_[b]; }
   double total_mass() const;  // with batch item 0's density
   // Displacement of a rest-pose point (trilinear in its cell); InputError outside the body's cells.
   Eigen::Vector3d probe(int b, const Eigen::Vector3d& rest_point) const;
@@ -101,7 +107,7 @@ class Simulation {
 
  private:
   void write_inputs(int b);
-  void check_state(int b, const char* when = "step") const;  // when: how the error names the step
+  void check_state(int b, const char* when = "step");  // when: how the error names the step
   void require_host_state() const;
   void advance(bool to_host, int keep_key);
   std::vector<int> state_tensors() const;  // u_prev, v_prev and, with extension, band_guess
@@ -126,6 +132,7 @@ class Simulation {
   };
   std::map<int, Kept> kept_;  // checkpoints and kept steps by key
   std::vector<PhysicalParameters> params_;
+  std::vector<SimulationAudit> audits_;
   std::vector<char> fixed_;
   double dt_, theta_;
   int steps_ = 0;

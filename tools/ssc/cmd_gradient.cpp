@@ -10,6 +10,8 @@
 #include "tools/ssc/commands.h"
 #include "tools/ssc/device_option.h"
 #include "tools/ssc/progress.h"
+#include "models/io/run_record.h"
+#include "models/sim/match_check.h"
 
 namespace ssc {
 namespace {
@@ -28,6 +30,7 @@ Command register_gradient(CLI::App& app) {
     std::vector<std::string> overrides, params;
     bool check_fd = false;
     double phi_max = 0;
+    ProgressMode progress = ProgressMode::Auto;
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand("gradient", "Cost and exact adjoint gradient of the sparse surface constraint");
@@ -38,6 +41,7 @@ Command register_gradient(CLI::App& app) {
   sub->add_option("--params", o->params, "Parameters to report (default: all), comma-separated")->delimiter(',');
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres (default: the scene's, else 2 cells)");
   sub->add_flag("--check-fd", o->check_fd, "Also compute central finite differences (tightens the solver tolerances)");
+  add_progress_options(sub, &o->progress);
   return [o] {
     std::vector<std::string> overrides = o->overrides;
     if (o->check_fd) {
@@ -59,7 +63,8 @@ Command register_gradient(CLI::App& app) {
     for (const FrameCost& f : r.frames) points += f.points, matched += f.matched;
     out["observed_points"] = points;
     out["matched_points"] = matched;
-    Progress progress("finite differences", int(names.size()));
+    check_matches(r.frames, o->observations, "the scene's parameters");
+    Progress progress("finite differences: parameter", int(names.size()), o->progress);
     nlohmann::json params = nlohmann::json::object();
     GradientOptions cost_only;
     cost_only.gradient = false;
@@ -89,6 +94,7 @@ Command register_gradient(CLI::App& app) {
     }
     progress.finish();
     out["parameters"] = params;
+    out["warnings"] = warnings_json();
     std::printf("%s\n", out.dump(2).c_str());
     return 0;
   };

@@ -12,6 +12,8 @@
 #include "codegen/cuda_source.h"
 #include "codegen/kernel_plan.h"
 #include "models/io/errors.h"
+#include "models/io/output_dir.h"
+#include "models/io/run_record.h"
 #include "models/sim/scene.h"
 #include "models/sim/timestep_graph.h"
 #include "runtime/nvrtc_compiler.h"
@@ -20,33 +22,49 @@
 namespace ssc {
 namespace {
 
+void write_text(const std::string& path, const std::string& text) {
+  std::ofstream f(path);
+  f << text;
+  f.close();
+  if (!f) throw InputError(fmt::format("{}: cannot write the file; is the disk full?", path));
+}
+
 struct KernelsOptions {
   std::string scene, out, arch = "sm_90", real = "double";
+  std::vector<std::string> overrides;
   bool extension = true, no_compile = false, fmad = false;
 };
 
 int run_kernels(const KernelsOptions& o) {
   namespace fs = std::filesystem;
   if (o.real != "double" && o.real != "float") throw InputError("--real must be float or double, not " + o.real);
-  const Scene scene = load_scene(o.scene);
+  const Scene scene = load_scene(o.scene, o.overrides);
+  OutputDir out(o.out, {o.scene});
+  out.manifest()["scene"] = {{"file", o.scene}, {"resolved", scene.resolved}};
+  out.manifest()["arch"] = o.arch;
+  out.manifest()["real"] = o.real;
   const TimestepGraph t = build_timestep_graph(int(scene.planes.size()), o.extension);
   const KernelPlan plan = plan_kernels(t.graph);
-  fs::create_directories(fs::path(o.out) / "kernels");
-  std::ofstream(fs::path(o.out) / "graph.txt") << t.graph.describe();
-  std::ofstream(fs::path(o.out) / "plan.txt") << plan.text(t.graph);
+  fs::create_directories(fs::path(out.file("kernels")));
+  write_text(out.file("graph.txt"), t.graph.describe());
+  write_text(out.file("plan.txt"), plan.text(t.graph));
   const CodegenOptions co{o.real, 128};
   std::vector<KernelSource> sources;
   for (const PlannedKernel* k : plan.unique_kernels()) {
     sources.push_back({k->name, kernel_source(*k, co)});
-    std::ofstream(fs::path(o.out) / "kernels" / (k->name + ".cu")) << sources.back().source;
+    write_text(out.file("kernels/" + k->name + ".cu"), sources.back().source);
   }
   std::printf("%s: %zu forward and %zu adjoint launches per step, %zu distinct kernels (Real = %s)\n",
               scene.file.c_str(), plan.forward.size(), plan.adjoint.size(), sources.size(), o.real.c_str());
-  std::printf("plan and sources written to %s\n", o.out.c_str());
-  if (o.no_compile) return 0;
-  if (!nvrtc_available()) {
-    std::fprintf(stderr, "ssc: NVRTC is not available (built without the CUDA toolkit): sources only\n");
+  auto finish = [&] {
+    out.commit();
+    std::printf("plan and sources written to %s\n", o.out.c_str());
     return 0;
+  };
+  if (o.no_compile) return finish();
+  if (!nvrtc_available()) {
+    warn("no_nvrtc", "NVRTC is not available (built without the CUDA toolkit): sources only");
+    return finish();
   }
   NvrtcOptions no;
   no.arch = o.arch;
@@ -54,19 +72,21 @@ int run_kernels(const KernelsOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const std::vector<CompiledKernel> compiled = compile_kernels(sources, no);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::printf("\n%-58s %5s %6s %6s %7s %7s %9s\n", "kernel", "regs", "smem", "stack", "spill_s", "spill_l", "compile");
+  std::string table = fmt::format("{:<58} {:>5} {:>6} {:>6} {:>7} {:>7} {:>9}\n", "kernel", "regs", "smem", "stack",
+                                  "spill_s", "spill_l", "compile");
   int cached = 0;
   for (const CompiledKernel& k : compiled) {
     const KernelResources& r = k.resources;
     cached += k.from_cache;
-    std::printf("%-58s %5d %6d %6d %7d %7d %9s\n", k.name.c_str(), r.registers, r.shared_bytes, r.stack_bytes,
-                r.spill_store_bytes, r.spill_load_bytes,
-                k.from_cache ? "cached" : fmt::format("{:.0f} ms", k.compile_ms).c_str());
+    table += fmt::format("{:<58} {:>5} {:>6} {:>6} {:>7} {:>7} {:>9}\n", k.name, r.registers, r.shared_bytes, r.stack_bytes,
+                         r.spill_store_bytes, r.spill_load_bytes, k.from_cache ? "cached" : fmt::format("{:.0f} ms", k.compile_ms));
   }
+  write_text(out.file("resources.txt"), table);
+  std::printf("\n%s", table.c_str());
   std::printf("\n%zu kernels for %s (%s, NVRTC %s): %.2f s wall, %d from the cache (%s)\n", compiled.size(),
               o.arch.c_str(), std::all_of(compiled.begin(), compiled.end(), [](const CompiledKernel& k) { return k.is_cubin; }) ? "CUBIN" : "PTX fallback", nvrtc_version().c_str(), secs, cached,
               kernel_cache_dir().empty() ? "cache off" : kernel_cache_dir().c_str());
-  return 0;
+  return finish();
 }
 
 }  // namespace
@@ -75,11 +95,12 @@ Command register_kernels(CLI::App& app) {
   auto o = std::make_shared<KernelsOptions>();
   CLI::App* sub = app.add_subcommand("kernels", "Write and compile the CUDA kernels of a scene's timestep (no GPU needed)");
   sub->add_option("scene", o->scene, "Scene JSON file")->required();
-  sub->add_option("--out", o->out, "Output folder for plan.txt and kernels/*.cu")->required();
+  sub->add_option("--out", o->out, "Output folder for plan.txt, resources.txt and kernels/*.cu (replaced atomically)")->required();
   sub->add_option("--arch", o->arch, "GPU architecture, e.g. sm_90");
   sub->add_option("--real", o->real, "float or double");
   sub->add_flag("--fmad", o->fmad, "Allow fused multiply-add contraction (default off)");
   sub->add_flag("--no-compile", o->no_compile, "Write plan and sources only");
+  sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
   return [o] { return run_kernels(*o); };
 }
 

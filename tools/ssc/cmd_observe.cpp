@@ -8,6 +8,8 @@
 #include "tools/ssc/commands.h"
 #include "tools/ssc/device_option.h"
 #include "tools/ssc/progress.h"
+#include "tools/ssc/run_checks.h"
+#include "models/io/output_dir.h"
 
 namespace ssc {
 
@@ -16,6 +18,7 @@ Command register_observe(CLI::App& app) {
     std::string scene, out;
     std::vector<std::string> overrides;
     std::string device = "auto";
+    ProgressMode progress = ProgressMode::Auto;
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand("observe", "Simulate a scene and render synthetic depth observations");
@@ -23,16 +26,23 @@ Command register_observe(CLI::App& app) {
   sub->add_option("--out", o->out, "Observation folder to write (replaced atomically)")->required();
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
   add_device_option(sub, &o->device);
+  add_progress_options(sub, &o->progress);
   return [o] {
     const Scene scene = load_scene(o->scene, o->overrides);
     const ObservationSpec spec = parse_observation_spec(scene);
+    OutputDir out(o->out, {o->scene});
+    out.manifest()["scene"] = {{"file", o->scene}, {"resolved", scene.resolved}};
     const SimGrid grid = build_body_grid(scene);
-    Progress progress("observe", scene.time.steps / spec.every + 1);
+    Progress progress("observe: frame", scene.time.steps / spec.every + 1, o->progress);
     const ObservationSet set = render_observations(
         scene, grid, spec, [&](int done, int) { progress.update(done); },
-        [&](Simulation& sim) { place_simulation(sim, o->device); });
+        [&](Simulation& sim) {
+          out.manifest()["device"] = place_simulation(sim, o->device);
+        },
+        [&](const Simulation& sim) { report_inverted_cells(sim); });
     progress.finish();
-    write_observations(o->out, set);
+    write_observation_files(out.path(), set);
+    out.commit();
     size_t points = 0;
     for (int f = 0; f < set.frame_count; ++f)
       for (const DepthImage& img : set.frames[f])

@@ -4,9 +4,10 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <unistd.h>
 
 #include <fstream>
+#include <map>
+#include <regex>
 #include <nlohmann/json.hpp>
 
 #include "models/io/errors.h"
@@ -21,6 +22,9 @@
 #include "tools/ssc/device_option.h"
 #include "tools/ssc/fit_renders.h"
 #include "tools/ssc/progress.h"
+#include "models/io/folder_hash.h"
+#include "models/io/run_record.h"
+#include "models/sim/match_check.h"
 
 namespace ssc {
 namespace {
@@ -34,7 +38,8 @@ nlohmann::json named(const std::vector<std::string>& names, const Eigen::VectorX
 void write_text(const OutputDir& out, const std::string& name, const std::string& text) {
   std::ofstream f(out.file(name));
   f << text;
-  if (!f) throw InputError(fmt::format("cannot write {}", out.file(name)));
+  f.close();
+  if (!f) throw InputError(fmt::format("cannot write {}; is the disk full?", out.file(name)));
 }
 
 void write_convergence_plots(const OutputDir& out, const ReconstructionResult& r) {
@@ -65,6 +70,101 @@ void write_convergence_plots(const OutputDir& out, const ReconstructionResult& r
   write_svg_plot(out.file("convergence.svg"), panels, 720, 260);
 }
 
+
+// Why every start failed, grouped by reason (numbers left out), the first message of each.
+std::string failure_summary(const ReconstructionResult& r) {
+  std::map<std::string, std::vector<size_t>> groups;
+  std::map<std::string, std::string> first;
+  for (size_t s = 0; s < r.starts.size(); ++s) {
+    std::string key = std::regex_replace(r.starts[s].failure, std::regex("[-+]?[0-9][0-9.eE+-]*"), "#");
+    groups[key].push_back(s);
+    first.emplace(key, r.starts[s].failure);
+  }
+  std::string text = fmt::format("every start's simulation failed ({} of {}):", r.starts.size(), r.starts.size());
+  for (const auto& [key, starts] : groups) {
+    std::string list;
+    for (size_t k = 0; k < starts.size() && k < 8; ++k) list += (k ? ", " : "") + std::to_string(starts[k]);
+    if (starts.size() > 8) list += ", ...";
+    text += fmt::format("\n  {} start(s) ({}): {}", starts.size(), list, first[key]);
+  }
+  return text;
+}
+
+// The best fit must rest on matched points and a gradient that is not identically zero;
+// a best start that never moved is worth a warning.
+void check_fit(const ReconstructionResult& r, const std::string& observations) {
+  const StartRecord& best = r.starts[r.best];
+  std::vector<FrameCost> total(1);
+  total[0].points = best.observed_points;
+  total[0].matched = best.matched_points;
+  if (best.matched_points < kMinMatchedFraction * best.observed_points) check_matches(total, observations, "the best fit");
+  bool all_zero = true;
+  for (const StartRecord& s : r.starts) all_zero &= s.failed || s.initial_gradient_norm == 0;
+  if (all_zero)
+    throw InputError(fmt::format("{}: the cost's gradient is exactly zero at every start: the fitted parameters do not "
+                                 "change the cost (no observed point reacts to them). Check that the observations show "
+                                 "the body while it moves, and that --fit names parameters the data depends on",
+                                 observations));
+  if (best.final == best.initial)
+    warn("fit_did_not_move", "the best start ended where it started: the optimiser found no better point; the result is "
+                             "its start value, not a fit. Try more --starts or --iterations, or check the observations");
+  if (best.stop_reason == "iteration limit")
+    warn("not_converged", fmt::format("the best start stopped at the iteration limit ({} iterations) with gradient norm "
+                                      "{:.3g}: the fit is not converged; raise --iterations",
+                                      best.iterations, best.final_gradient_norm));
+}
+
+// How many starts reached the best cost (within 1 %) and how far their parameters spread.
+nlohmann::json convergence_summary(const ReconstructionResult& r) {
+  const double best_cost = r.starts[r.best].final_cost;
+  nlohmann::json j;
+  int failed = 0, reached = 0;
+  std::map<std::string, int> reasons;
+  std::vector<Eigen::VectorXd> close;
+  for (const StartRecord& s : r.starts) {
+    failed += s.failed;
+    ++reasons[s.stop_reason];
+    if (!s.failed && s.final_cost <= best_cost + 0.01 * std::abs(best_cost)) close.push_back(s.final), ++reached;
+  }
+  j["starts"] = r.starts.size();
+  j["failed_starts"] = failed;
+  j["starts_within_1_percent_of_best_cost"] = reached;
+  j["stop_reasons"] = reasons;
+  nlohmann::json spread = nlohmann::json::object();
+  for (size_t i = 0; i < r.names.size(); ++i) {
+    double lo = close[0][i], hi = close[0][i];
+    for (const Eigen::VectorXd& x : close) lo = std::min(lo, x[i]), hi = std::max(hi, x[i]);
+    spread[r.names[i]] = {{"min", lo}, {"max", hi}};
+  }
+  j["spread_of_starts_within_1_percent"] = spread;
+  j["converged"] = r.starts[r.best].stop_reason != "iteration limit";
+  return j;
+}
+
+void print_report(const ReconstructionResult& r, const nlohmann::json& convergence) {
+  const StartRecord& best = r.starts[r.best];
+  std::printf("%-6s %-13s %-28s %10s %8s\n", "start", "final cost", "stopped by", "|grad|", "matched");
+  for (size_t s = 0; s < r.starts.size(); ++s) {
+    const StartRecord& rec = r.starts[s];
+    if (rec.failed) {
+      std::printf("%-6zu failed: %s\n", s, rec.failure.substr(0, 100).c_str());
+      continue;
+    }
+    std::printf("%-6zu %-13.6g %-28s %10.3g %7.1f%%%s\n", s, rec.final_cost, rec.stop_reason.c_str(), rec.final_gradient_norm,
+                rec.observed_points ? 100.0 * rec.matched_points / rec.observed_points : 0.0, int(s) == r.best ? "  <- best" : "");
+  }
+  std::printf("best start %d of %zu: cost %.6g, %d of %d observed points matched; %d start(s) within 1 %% of the best cost\n",
+              r.best, r.starts.size(), best.final_cost, best.matched_points, best.observed_points,
+              convergence["starts_within_1_percent_of_best_cost"].get<int>());
+  for (size_t i = 0; i < r.names.size(); ++i) {
+    const nlohmann::json& sp = convergence["spread_of_starts_within_1_percent"][r.names[i]];
+    std::printf("  %s = %.6g %s (nominal %.6g; starts within 1 %%: %.6g .. %.6g)\n", r.names[i].c_str(), best.final[i],
+                r.units[i].c_str(), r.nominal[i], sp["min"].get<double>(), sp["max"].get<double>());
+  }
+  if (!convergence["converged"].get<bool>())
+    std::printf("NOT CONVERGED: the best start stopped at the iteration limit; raise --iterations\n");
+}
+
 }  // namespace
 
 Command register_reconstruct(CLI::App& app) {
@@ -76,6 +176,7 @@ Command register_reconstruct(CLI::App& app) {
     std::string gradient = "adjoint";
     std::uint64_t seed = 1;
     double phi_max = 0;
+    ProgressMode progress = ProgressMode::Auto;
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand("reconstruct", "Fit physical parameters to observations from perturbed starts");
@@ -92,6 +193,7 @@ Command register_reconstruct(CLI::App& app) {
   sub->add_option("--out", o->out, "Output folder (replaced atomically)")->required();
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
   add_device_option(sub, &o->device);
+  add_progress_options(sub, &o->progress);
   return [o] {
     const std::string device = choose_device(o->device);
     const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max);
@@ -105,38 +207,49 @@ Command register_reconstruct(CLI::App& app) {
     ro.finite_differences = o->gradient == "fd";
     ro.device = device;
     make_optimizer(ro.optimizer, Eigen::VectorXd::Zero(1), ro.optimizer_options);  // reject unknown names early
-    const std::vector<std::string> names = expand_parameter_names(ro.fit, PhysicalParameters::from_scene(problem.scene));
-    OutputDir out(o->out);
-    const bool tty = isatty(fileno(stderr));
-    const ReconstructionResult r = reconstruct(problem, ro, [&](int it, int active, double best, const Eigen::VectorXd& x) {
-      if (!tty) return;
+    const PhysicalParameters nominal = PhysicalParameters::from_scene(problem.scene);
+    const std::vector<std::string> names = expand_parameter_names(ro.fit, nominal);
+    OutputDir out(o->out, {o->scene, o->observations});
+    out.manifest()["scene"] = {{"file", o->scene}, {"resolved", problem.scene.resolved}};
+    out.manifest()["observations"] = folder_fingerprint(o->observations);
+    out.manifest()["device"] = device == "cuda" ? gpu_description() : "cpu";
+    Progress progress("reconstruct: round", o->iterations, o->progress, 0.0);
+    const ReconstructionResult r = reconstruct(problem, ro, [&](int round, int active, double best, const Eigen::VectorXd& x) {
       std::string values;
       for (int i = 0; i < x.size(); ++i) values += fmt::format(" {}={:.5g}", names[i], x[i]);
-      std::fprintf(stderr, "\rround %d: %d starts running, best cost %.6g,%s\033[K", it, active, best, values.c_str());
+      progress.update(std::min(round, o->iterations), fmt::format("{} starts running, best cost {:.6g},{}", active, best, values));
     });
-    if (tty) std::fprintf(stderr, "\n");
-    if (r.best < 0) throw SimulationError("every start's simulation failed; see the failures with fewer starts or a smaller time.dt");
+    progress.finish();
+    if (r.best < 0) throw SimulationError(failure_summary(r));
+    const StartRecord& best = r.starts[r.best];
+    check_fit(r, o->observations);
 
     nlohmann::json j;
-    j["parameters"] = named(r.names, r.starts[r.best].final);
+    j["parameters"] = named(r.names, best.final);
     j["units"] = nlohmann::json::object();
     for (size_t i = 0; i < r.names.size(); ++i) j["units"][r.names[i]] = r.units[i];
+    j["set"] = nlohmann::json::array();
+    for (size_t i = 0; i < r.names.size(); ++i) j["set"].push_back(parameter_set_argument(nominal, r.names[i], best.final[i]));
     if (!scales.identity()) {
       // The scene is in its own units: report SI values too (models/sim/units.h).
       nlohmann::json si = nlohmann::json::object();
-      for (size_t i = 0; i < r.names.size(); ++i) si[r.names[i]] = to_si(r.names[i], r.starts[r.best].final[i], scales);
+      for (size_t i = 0; i < r.names.size(); ++i) si[r.names[i]] = to_si(r.names[i], best.final[i], scales);
       j["parameters_si"] = si;
       j["unit_scales"] = {{"length", scales.length}, {"mass", scales.mass}, {"time", scales.time}};
     }
-    j["cost"] = r.starts[r.best].final_cost;
+    j["cost"] = best.final_cost;
     j["best_start"] = r.best;
+    j["matched_points"] = best.matched_points;
+    j["observed_points"] = best.observed_points;
     j["nominal"] = named(r.names, r.nominal);
+    j["convergence"] = convergence_summary(r);
     j["optimizer"] = ro.optimizer;
     j["gradient"] = o->gradient;
     j["seed"] = ro.seed;
     j["evaluations"] = r.evaluations;
     j["wall_seconds"] = r.wall_seconds;
     j["device"] = device == "cuda" ? gpu_description() : "cpu";
+    j["warnings"] = warnings_json();
     nlohmann::json starts = nlohmann::json::array();
     std::string csv = "start,iteration,cost";
     for (const std::string& n : r.names) csv += "," + n;
@@ -149,6 +262,11 @@ Command register_reconstruct(CLI::App& app) {
       e["final_cost"] = rec.failed ? nlohmann::json(nullptr) : nlohmann::json(rec.final_cost);
       e["iterations"] = rec.iterations;
       e["stop_reason"] = rec.stop_reason;
+      if (!rec.failed) {
+        e["final_gradient_norm"] = rec.final_gradient_norm;
+        e["matched_points"] = rec.matched_points;
+        e["observed_points"] = rec.observed_points;
+      }
       if (rec.failed) e["failure"] = rec.failure;
       nlohmann::json hist = nlohmann::json::array();
       for (size_t k = 0; k < rec.cost_history.size(); ++k) {
@@ -164,11 +282,10 @@ Command register_reconstruct(CLI::App& app) {
     write_text(out, "result.json", j.dump(2) + "\n");
     write_text(out, "history.csv", csv);
     write_convergence_plots(out, r);
-    const std::vector<std::string> renders = write_fit_renders(out, problem, r.names, r.starts[r.best].final);
+    const std::vector<std::string> renders = write_fit_renders(out, problem, r.names, best.final);
+    out.manifest()["warnings"] = warnings_json();
     out.commit();
-    std::printf("best start %d of %zu: cost %.6g\n", r.best, r.starts.size(), r.starts[r.best].final_cost);
-    for (size_t i = 0; i < r.names.size(); ++i)
-      std::printf("  %s = %.6g %s (nominal %.6g)\n", r.names[i].c_str(), r.starts[r.best].final[i], r.units[i].c_str(), r.nominal[i]);
+    print_report(r, j["convergence"]);
     std::printf("wrote %s: result.json, history.csv, convergence.svg, %zu renders (%.1f s)\n", o->out.c_str(), renders.size(),
                 r.wall_seconds);
     return 0;

@@ -10,12 +10,14 @@
 #include "models/io/errors.h"
 #include "models/io/output_dir.h"
 #include "models/io/ply_writer.h"
+#include "models/io/run_record.h"
 #include "models/sim/body.h"
 #include "models/sim/deformed_surface.h"
 #include "models/sim/simulation.h"
 #include "tools/ssc/commands.h"
 #include "tools/ssc/device_option.h"
 #include "tools/ssc/progress.h"
+#include "tools/ssc/run_checks.h"
 
 namespace ssc {
 namespace {
@@ -25,6 +27,7 @@ struct SimulateOptions {
   std::vector<std::string> overrides, probes;
   bool no_frames = false;
   std::string device = "auto";
+  ProgressMode progress = ProgressMode::Auto;
 };
 
 Eigen::Vector3d parse_probe(const std::string& text) {
@@ -45,6 +48,8 @@ nlohmann::json frame_record(const Simulation& sim, int frame, const std::vector<
   f["center_of_mass"] = vec_json(sim.center_of_mass(0));
   f["kinetic_energy"] = sim.kinetic_energy(0);
   f["elastic_energy"] = sim.elastic_energy(0);
+  f["gravitational_energy"] = sim.gravitational_energy(0);
+  f["contact_energy"] = sim.contact_energy(0);
   f["cg_iterations"] = frame == 0 ? 0 : sim.last_cg_iterations(0);
   if (!sim.on_gpu()) f["degenerate_cells"] = frame == 0 ? 0 : sim.last_report().degenerate_cells[0];
   nlohmann::json p = nlohmann::json::array();
@@ -56,6 +61,8 @@ nlohmann::json frame_record(const Simulation& sim, int frame, const std::vector<
 int run_simulate(const SimulateOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene(o.scene, o.overrides);
+  OutputDir out(o.out, {o.scene});
+  out.manifest()["scene"] = {{"file", o.scene}, {"resolved", scene.resolved}};
   std::vector<Eigen::Vector3d> probes;
   for (const std::string& p : o.probes) probes.push_back(parse_probe(p));
   const SimGrid grid = build_body_grid(scene);
@@ -63,11 +70,10 @@ int run_simulate(const SimulateOptions& o) {
   for (const Eigen::Vector3d& p : probes) sim.probe(0, p);  // reject bad probes before running
   const std::string device = place_simulation(sim, o.device);
   const DeformedSurface surface(grid);
-  OutputDir out(o.out);
+  out.manifest()["device"] = device;
   std::filesystem::create_directories(out.file("frames"));
-  std::fprintf(stderr, "ssc: %s: %d cells, %d nodes, %d band nodes, %zu contact points, mass %.4g kg\n",
-               scene.file.c_str(), grid.cell_count, grid.node_count, grid.band_count, grid.collision_points.size(),
-               sim.total_mass());
+  note(fmt::format("{}: {} cells, {} nodes, {} band nodes, {} contact points, mass {:.4g} kg", scene.file, grid.cell_count,
+                   grid.node_count, grid.band_count, grid.collision_points.size(), sim.total_mass()));
 
   nlohmann::json frames = nlohmann::json::array();
   auto write_frame = [&](int frame) {
@@ -77,7 +83,7 @@ int run_simulate(const SimulateOptions& o) {
                 surface.triangles());
   };
   write_frame(0);
-  Progress progress("simulate", scene.time.steps);
+  Progress progress("simulate: step", scene.time.steps, o.progress);
   const auto sim_start = std::chrono::steady_clock::now();
   for (int s = 1; s <= scene.time.steps; ++s) {
     sim.step();
@@ -85,6 +91,7 @@ int run_simulate(const SimulateOptions& o) {
     progress.update(s, fmt::format("CG {}", sim.last_cg_iterations(0)));
   }
   progress.finish();
+  report_inverted_cells(sim);
   const double sim_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - sim_start).count();
 
   nlohmann::json summary;
@@ -106,6 +113,7 @@ int run_simulate(const SimulateOptions& o) {
   summary["frames"] = frames;
   summary["device"] = device;
   summary["seconds_per_step"] = scene.time.steps > 0 ? sim_seconds / scene.time.steps : 0.0;
+  summary["warnings"] = warnings_json();
   summary["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   {
     std::ofstream f(out.file("summary.json"));
@@ -129,6 +137,7 @@ Command register_simulate(CLI::App& app) {
   sub->add_option("--probe", o->probes, "Record the displacement of rest point x,y,z (metres), repeatable");
   sub->add_flag("--no-frames", o->no_frames, "Write only summary.json, no PLY frames");
   add_device_option(sub, &o->device);
+  add_progress_options(sub, &o->progress);
   return [o] { return run_simulate(*o); };
 }
 

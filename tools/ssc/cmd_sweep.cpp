@@ -14,6 +14,8 @@
 #include "tools/ssc/commands.h"
 #include "tools/ssc/device_option.h"
 #include "tools/ssc/progress.h"
+#include "models/io/folder_hash.h"
+#include "models/sim/match_check.h"
 
 namespace ssc {
 namespace {
@@ -46,6 +48,7 @@ Command register_sweep(CLI::App& app) {
     std::vector<std::string> overrides;
     bool log = false;
     double phi_max = 0, truth = std::nan("");
+    ProgressMode progress = ProgressMode::Auto;
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand("sweep", "Cost and gradient along one parameter (CSV and SVG plot)");
@@ -61,15 +64,26 @@ Command register_sweep(CLI::App& app) {
   sub->add_option("--cost", o->cost, "ssc (default), or the baselines disp (known correspondences) and sdf (full SDF "
                                      "difference), which simulate the truth from --truth")
       ->check(CLI::IsMember({"ssc", "disp", "sdf"}));
+  add_progress_options(sub, &o->progress);
   return [o] {
     SweepRange range = parse_range(o->param);
     if (o->log && (range.lo <= 0 || range.hi <= 0)) throw InputError("--log needs positive LO and HI");
     const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max);
+    OutputDir out(o->out, {o->scene, o->observations});
+    out.manifest()["scene"] = {{"file", o->scene}, {"resolved", problem.scene.resolved}};
+    out.manifest()["observations"] = folder_fingerprint(o->observations);
     Simulation sim(problem.scene, problem.grid, 1, true);
-    place_simulation(sim, o->device);
+    out.manifest()["device"] = place_simulation(sim, o->device);
     const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
     const PhysicalParameters base = sim.parameters(0);
-    range.name = expand_parameter_names({range.name}, base).at(0);
+    const std::vector<std::string> expanded = expand_parameter_names({range.name}, base);
+    if (expanded.size() != 1)
+      throw InputError(fmt::format("--param {}: '{}' is a vector; sweep one component at a time ({}, {} or {})", o->param,
+                                   range.name, expanded[0], expanded[1], expanded[2]));
+    range.name = expanded[0];
+    for (double end : {range.lo, range.hi})
+      if (const std::string why = parameter_value_error(range.name, end); !why.empty())
+        throw InputError(fmt::format("--param {}: {} {}", o->param, range.name, why));
     std::vector<int> steps;
     for (const ObservedFrame& f : problem.frames) steps.push_back(f.step);
     FrameCostFunction frame_cost = [&](size_t f, int, const double* u, const double* band, double* ub, double* bb) {
@@ -83,9 +97,10 @@ Command register_sweep(CLI::App& app) {
       truth = simulate_truth(problem.scene, problem.grid, true_params, steps, cost);
       frame_cost = o->cost == "disp" ? displacement_cost(truth) : sdf_difference_cost(truth, cost);
     }
-    OutputDir out(o->out);
     std::vector<double> xs, costs, grads;
-    Progress progress("sweep", range.count);
+    std::vector<FrameCost> best_matches;
+    int best_matched = -1;
+    Progress progress("sweep: sample", range.count, o->progress);
     std::string csv = fmt::format("{},cost,gradient,matched_points,observed_points\n", range.name);
     for (int i = 0; i < range.count; ++i) {
       const double t = double(i) / (range.count - 1);
@@ -96,6 +111,7 @@ Command register_sweep(CLI::App& app) {
       const CostGradient r = evaluate_trajectory_gradient(sim, steps, frame_cost)[0];
       int points = 0, matched = 0;
       for (const FrameCost& f : r.frames) points += f.points, matched += f.matched;
+      if (matched > best_matched) best_matched = matched, best_matches = r.frames;
       xs.push_back(x);
       costs.push_back(r.cost);
       grads.push_back(parameter_gradient(r.gradient, p, range.name));
@@ -103,6 +119,7 @@ Command register_sweep(CLI::App& app) {
       progress.update(i + 1, fmt::format("{} = {:.4g}", range.name, x));
     }
     progress.finish();
+    if (o->cost == "ssc") check_matches(best_matches, o->observations, "the sweep's best-matching sample");
     {
       std::ofstream f(out.file("sweep.csv"));
       f << csv;

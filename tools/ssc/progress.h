@@ -1,31 +1,34 @@
-// A one-line progress display on a terminal; silent when stderr is not a terminal.
+// Progress of long commands. Auto (default): one line rewritten in place when stderr is a
+// terminal, nothing otherwise. --progress: a line per update on stderr even when it is not a
+// terminal (nohup, batch systems), with the count, elapsed time and an estimate of the rest.
+// --quiet: no progress and no notes, only warnings and errors.
 #pragma once
-#include <unistd.h>
-
+#include <CLI/CLI.hpp>
 #include <chrono>
-#include <cstdio>
 #include <string>
 
 namespace ssc {
 
+enum class ProgressMode { Auto, Lines, Quiet };
+
+void add_progress_options(CLI::App* sub, ProgressMode* mode);
+// Informational lines ("running on the CPU"), silenced by --quiet.
+void note(const std::string& line);
+void set_quiet(bool quiet);
+
 class Progress {
  public:
-  Progress(std::string label, int total)
-      : label_(std::move(label)), total_(total), enabled_(isatty(fileno(stderr))), start_(std::chrono::steady_clock::now()) {}
-  void update(int done, const std::string& detail = "") {
-    if (!enabled_) return;
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    std::fprintf(stderr, "\r%s %d/%d (%.1f s) %s\033[K", label_.c_str(), done, total_, s, detail.c_str());
-    std::fflush(stderr);
-  }
-  void finish() {
-    if (enabled_) std::fprintf(stderr, "\n");
-  }
+  // min_interval_s: in Lines mode, at most one line per this many seconds (the last always).
+  Progress(std::string label, int total, ProgressMode mode, double min_interval_s = 1.0);
+  void update(int done, const std::string& detail = "");
+  void finish();
 
  private:
   std::string label_;
   int total_;
-  bool enabled_;
+  ProgressMode mode_;
+  bool terminal_;
+  double min_interval_s_, last_line_s_ = -1e9;
   std::chrono::steady_clock::time_point start_;
 };
 
