@@ -512,7 +512,7 @@ TEST(ObservationTest, WriterRefusesInvalidSetsAndForeignFolders) {
   set.depth_patterns[1] = set.depth_patterns[0];
   expect_input_error([&] { write_observations(tmp / "obs", set); }, {"another camera"});
   spit(tmp / "precious.txt", "keep me");
-  expect_input_error([&] { write_observations(tmp.path.string(), small_set()); }, {"not an observation folder"});
+  expect_input_error([&] { write_observations(tmp.path.string(), small_set()); }, {"ssc did not make"});
   EXPECT_TRUE(fs::exists(tmp / "precious.txt"));
   EXPECT_FALSE(fs::exists(tmp / "obs"));
 }

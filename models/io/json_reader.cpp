@@ -171,8 +171,8 @@ void apply_override(json& config, const std::string& assignment, const std::stri
     const double d = std::strtod(text.c_str(), &end);
     const bool numeric = !text.empty() && end == text.c_str() + text.size();
     if (bare == "nan" || bare == "inf" || bare == "infinity" || (numeric && (!std::isfinite(d) || errno == ERANGE)))
-      throw InputError(fmt::format("--set {}={}: not a finite number; give a value within +-1.8e308 (NaN and infinity "
-                                   "are refused)", key, text));
+      throw InputError(fmt::format("{}: --set {}={}: not a finite number; give a value within +-1.8e308 (NaN and "
+                                   "infinity are refused)", file, key, text));
   }
   try {
     value = json::parse(text);

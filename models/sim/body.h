@@ -12,7 +12,7 @@ constexpr int kGridBorderCells = 3;
 // The grid's volume is checked against the object's own (analytic for primitives, enclosed
 // for closed meshes; .sdf files have no other volume): more than kVolumeLossWarning off is a
 // warning, more than kVolumeLossError lost an InputError.
-constexpr double kVolumeLossWarning = 0.05, kVolumeLossError = 0.25;
+constexpr double kVolumeLossWarning = 0.05, kVolumeLossError = 0.5;
 
 SdfGrid build_rest_sdf(const Scene& scene);
 SimGrid build_body_grid(const Scene& scene);

@@ -120,6 +120,8 @@ std::vector<std::string> expand_parameter_names(const std::vector<std::string>& 
 
 bool apply_parameter_override(nlohmann::json& config, const std::string& given, const nlohmann::json& value,
                               const std::string& file) {
+  // A scene key (material.youngs_modulus, ground.height) is left to the scene parser.
+  if (given.rfind("material.", 0) == 0 || given == "ground.height") return false;
   const std::string name = canonical_parameter_name(given);
   PhysicalParameters probe;
   int axis = 0;
@@ -130,10 +132,10 @@ bool apply_parameter_override(nlohmann::json& config, const std::string& given, 
                       name.rfind("ground.planes[", 0) == 0);
   if (!scalar && !component && !plane) return false;
   if (!value.is_number())
-    throw InputError(fmt::format("--set {}: must be a number, found {}", given, value.dump()));
+    throw InputError(fmt::format("{}: --set {}: must be a number, found {}", file, given, value.dump()));
   const double x = value.get<double>();
   if (const std::string why = parameter_value_error(name, x); !why.empty())
-    throw InputError(fmt::format("--set {}={}: {}", given, value.dump(), why));
+    throw InputError(fmt::format("{}: --set {}={}: {}", file, given, value.dump(), why));
   if (scalar) {
     config["material"][name] = x;
     return true;

@@ -47,8 +47,9 @@ void SimulationAudit::check(const Simulation& sim, int b, int step, const char* 
       throw SimulationError(fmt::format(
           "{} {}: the simulation gained energy (batch item {}): the total energy rose from {:.4g} J to {:.4g} J "
           "(kinetic {:.4g}, elastic {:.4g}, contact {:.4g}, gravitational {:.4g} J), more than solver.energy_tolerance "
-          "= {:g} of the run's energy scale {:.4g} J. Nothing in the model adds energy: the ground contact is too stiff "
-          "for time.dt, or time.dt is too large; lower time.dt, ground.stiffness or ground.softmin_alpha",
+          "= {:g} of the run's energy scale {:.4g} J. Nothing in the model adds energy: time.dt is too large for the "
+          "ground contact (lower time.dt, ground.stiffness or ground.softmin_alpha) or for a fast spin (each cell's "
+          "rotation lags one step, which stores spurious elastic energy growing with (omega dt)^2: lower time.dt)",
           when, step, b, energy_start, total, kinetic, elastic, contact, gravity, tolerance, energy_scale));
   }
   const int inverted = sim.inverted_cell_count(b);

@@ -6,6 +6,7 @@
 #include "models/io/errors.h"
 #include "models/sim/simulation.h"
 #include "runtime/cuda_runtime.h"
+#include "tools/ssc/progress.h"
 
 namespace ssc {
 
@@ -18,11 +19,11 @@ std::string choose_device(const std::string& device) {
   if (device == "cpu") return "cpu";
   const std::string why = gpu_unavailable_reason();
   if (why.empty()) {
-    std::fprintf(stderr, "ssc: running on %s\n", gpu_description().c_str());
+    note("running on " + gpu_description());
     return "cuda";
   }
-  if (device == "cuda") throw InputError("--device cuda: " + why + "; use --device cpu or --device auto");
-  std::fprintf(stderr, "ssc: %s; running on the CPU\n", why.c_str());
+  if (device == "cuda") throw GpuError("--device cuda: " + why + "; use --device cpu or --device auto");
+  note(why + "; running on the CPU");
   return "cpu";
 }
 
@@ -31,8 +32,8 @@ std::string place_simulation(Simulation& sim, const std::string& device) {
   try {
     sim.use_gpu();
   } catch (const GpuUnavailable& e) {
-    if (device == "cuda") throw InputError(std::string("--device cuda: ") + e.what());
-    std::fprintf(stderr, "ssc: %s; running on the CPU\n", e.what());
+    if (device == "cuda") throw GpuError(std::string("--device cuda: ") + e.what() + "; use --device cpu or --device auto");
+    note(std::string(e.what()) + "; running on the CPU");
     return "cpu";
   }
   return gpu_description();
