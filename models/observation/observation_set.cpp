@@ -11,6 +11,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fmt/format.h>
+
+#include <algorithm>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -19,6 +21,7 @@
 
 #include "models/io/errors.h"
 #include "models/io/output_dir.h"
+#include "models/io/run_record.h"
 
 namespace ssc {
 
@@ -317,9 +320,21 @@ void check_format(const Json& j, const std::string& file) {
                                  format, kObservationFormat));
 }
 
+// A key the reader does not know is most likely a typo of an optional one: say so.
+void warn_unknown_keys(const Json& j, const std::vector<std::string>& known, const std::string& file, const std::string& ctx) {
+  if (!j.is_object()) return;
+  std::string list;
+  for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+  for (auto it = j.begin(); it != j.end(); ++it)
+    if (std::find(known.begin(), known.end(), it.key()) == known.end())
+      warn("unknown_key", fmt::format("{}: unknown key '{}' is ignored (a typo?); the keys here are: {}", file,
+                                      qualified(ctx, it.key()), list));
+}
+
 // Everything of cameras.json; the images are read by read_frames.
 ObservationSet parse_header(const Json& j, const std::string& file) {
   check_format(j, file);
+  warn_unknown_keys(j, {"format", "dt", "depth_scale", "frame_count", "first_frame_time", "cameras"}, file, "");
   ObservationSet set;
   set.dt = get_number(j, "dt", file, "");
   set.depth_scale = get_number(j, "depth_scale", file, "");
@@ -331,6 +346,8 @@ ObservationSet parse_header(const Json& j, const std::string& file) {
     const std::string ctx = fmt::format("cameras[{}]", i);
     set.cameras.push_back(parse_camera(cams[i], file, ctx));
     set.depth_patterns.push_back(get_string(cams[i], "depth_pattern", file, ctx));
+    warn_unknown_keys(cams[i], {"name", "width", "height", "fx", "fy", "cx", "cy", "camera_to_world", "min_depth",
+                                "max_depth", "depth_pattern"}, file, ctx);
   }
   check_scalars(set.dt, set.depth_scale, set.first_frame_time, set.frame_count, set.cameras.size(), file);
   check_cameras(set.cameras, set.depth_patterns, set.frame_count, file);

@@ -22,9 +22,9 @@ GRAD='ssc gradient ball.json --observations obs --params youngs_modulus'
 SLOW='--set time.steps=1000000 --no-frames'
 
 # ---- malformed or truncated JSON scenes ----
-def json.malformed 2 'scene.json' 'scene JSON with a syntax error (missing comma)' \
+def json.malformed 2 'scene.json && not valid JSON' 'scene JSON with a syntax error (missing comma)' \
   'printf "{ \"object\": { \"primitive\": \"sphere\" \"radius\": 0.1 } }\n" > scene.json' "$SIM"
-def json.truncated 2 'scene.json' 'scene JSON cut off in the middle' \
+def json.truncated 2 'scene.json && not valid JSON' 'scene JSON cut off in the middle' \
   'head -c 300 "$FIX/ball.json" > scene.json' "$SIM"
 def json.empty 2 'scene.json' 'empty scene file' \
   ': > scene.json' "$SIM"
@@ -72,12 +72,16 @@ def range.ground-normal-zero 2 'ground.normal' 'ground normal [0, 0, 0]' \
   'scene ball.json scene.json "\"normal\": [0, 1, 0]" "\"normal\": [0, 0, 0]"' "$SIM"
 def range.grid-huge-resolution 2 'grid.resolution' 'grid.resolution 100000' \
   'scene ball.json scene.json "\"resolution\": 8" "\"resolution\": 100000"' "$SIM"
-def range.grid-tiny-cell 2 'cell_size' 'grid.cell_size 1e-9 (a grid of 10^23 nodes)' \
+def range.grid-tiny-cell 2 'scene.json && grid.cell_size' 'grid.cell_size 1e-9 (a grid of 10^23 nodes)' \
   'scene ball.json scene.json "\"resolution\": 8" "\"cell_size\": 1e-9"' "$SIM"
 def range.grid-both 2 'grid' 'grid with both cell_size and resolution' \
   'scene ball.json scene.json "\"resolution\": 8" "\"resolution\": 8, \"cell_size\": 0.03"' "$SIM"
 def range.grid-missing 2 'grid' 'primitive scene without a grid section' \
   'scene ball.json scene.json "\"grid\": { \"resolution\": 8 }," ""' "$SIM"
+def range.dirichlet-box 2 'dirichlet' 'dirichlet box with max below min' \
+  'scene ball.json scene.json "\"time\"" "\"dirichlet\": [ { \"min\": [0, 0, 0], \"max\": [-1, 1, 1] } ], \"time\""' "$SIM"
+def range.solver-tolerance 2 'solver.tolerance' 'solver.tolerance 2 (must be in (0, 1))' \
+  'scene ball.json scene.json "\"time\"" "\"solver\": { \"tolerance\": 2 }, \"time\""' "$SIM"
 
 # ---- unknown keys and names ----
 def key.scene-typo 2 'youngs_modulis' 'misspelt material key youngs_modulis' \
@@ -88,8 +92,12 @@ def key.primitive-name 2 'primitive' 'unknown primitive "cube"' \
   'scene ball.json scene.json "\"sphere\"" "\"cube\""' "$SIM"
 def key.two-shapes 2 'object' 'object with both primitive and mesh' \
   'fixture cube.obj; scene ball.json scene.json "\"primitive\": \"sphere\"," "\"primitive\": \"sphere\", \"mesh\": \"cube.obj\","' "$SIM"
-def key.cameras-unknown 0 'warning && colour' 'unknown key in cameras.json: a warning, the result is still useful' \
-  'obs; edit obs/cameras.json "\"format\"" "\"colour\": \"red\", \"format\""; fixture ball.json' "$GRAD" pending
+def key.cameras-unknown 0 'warning && colour' 'unknown key in cameras.json: a warning (also in the JSON result), the result is still useful' \
+  'obs; edit obs/cameras.json "\"format\"" "\"colour\": \"red\", \"format\""; fixture ball.json' \
+  'json=$(ssc gradient ball.json --observations obs --params youngs_modulus); rc=$?; grep -q colour <<<"$json" || { echo "catalogue: the JSON result has no warning about colour" >&2; exit 98; }; exit $rc'
+def warn.grid-volume 0 'warning && grid.resolution' 'grid that loses 8.6 % of the torus volume: a warning, recorded in summary.json' \
+  'scene torus.json scene.json "\"resolution\": 30" "\"resolution\": 20"' \
+  'ssc simulate scene.json --out out --no-frames && grep -q grid_volume out/summary.json || { echo "catalogue: no grid_volume warning in out/summary.json" >&2; exit 98; }' writes
 
 # ---- missing files; folders given as files ----
 def missing.scene 2 'nope.json' 'scene file that does not exist' \
@@ -110,8 +118,12 @@ def folder.scene 2 'scene.json && folder' 'scene path is a folder' \
   'mkdir scene.json' "$SIM"
 def folder.mesh 2 'cube.obj' 'mesh path is a folder' \
   'fixture mesh.json; mkdir cube.obj' 'ssc simulate mesh.json --out out'
-def folder.observations-file 2 'ball.json' '--observations names a file, not a folder' \
+def folder.observations-file 2 'ball.json && not a folder' '--observations names a file, not a folder' \
   'fixture ball.json' 'ssc gradient ball.json --observations ball.json'
+def folder.sdf 2 'ball.sdf' 'sdf_file path is a folder' \
+  'fixture sdf.json; mkdir ball.sdf' 'ssc simulate sdf.json --out out'
+def folder.cameras-json 2 'cameras.json && folder' 'cameras.json is a folder' \
+  'obs; rm obs/cameras.json; mkdir obs/cameras.json; fixture ball.json' "$GRAD"
 
 # ---- meshes ----
 def mesh.obj-garbage 2 'cube.obj' 'OBJ file of text that is not OBJ' \
@@ -170,6 +182,14 @@ def cameras.non-rigid 2 'camera_to_world' 'camera_to_world with a rotation scale
         0.0,"; fixture ball.json' "$GRAD"
 def cameras.frame-times 2 'dt' 'observed frames between simulation steps (dt 0.03 against time.dt 0.02)' \
   'obs; edit obs/cameras.json "\"dt\": 0.02" "\"dt\": 0.03"; fixture ball.json' "$GRAD"
+def cameras.missing-key 2 'cameras[0].fx' 'camera without fx' \
+  'obs; edit obs/cameras.json "\"fx\":" "\"focal\":"; fixture ball.json' "$GRAD"
+def cameras.depth-range 2 'depth_0000.png && max_depth' 'depths beyond the camera'"'"'s max_depth (max_depth 0.5 m, the ball is at 0.7 m)' \
+  'obs; edit obs/cameras.json "\"max_depth\": 3.0" "\"max_depth\": 0.5"; fixture ball.json' "$GRAD"
+def cameras.pattern-escape 2 'depth_pattern' 'depth_pattern that leaves the folder (../)' \
+  'obs; edit obs/cameras.json "cam0/depth_" "../cam0/depth_"; fixture ball.json' "$GRAD"
+def scene.no-observation 2 'observation' 'observe a scene without an observation section' \
+  'fixture mesh.json cube.obj' 'ssc observe mesh.json --out out'
 
 # ---- --set ----
 def set.nan 2 'material.youngs_modulus' '--set with NaN' \
@@ -190,6 +210,8 @@ def set.poisson 2 'poisson_ratio' '--set material.poisson_ratio=0.5' \
   'fixture ball.json' 'ssc simulate ball.json --out out --set material.poisson_ratio=0.5'
 def set.steps 2 'time.steps' '--set time.steps=-1' \
   'fixture ball.json' 'ssc simulate ball.json --out out --set time.steps=-1'
+def set.empty-component 2 '--set && material..density' '--set with an empty key component' \
+  'fixture ball.json' 'ssc simulate ball.json --out out --set material..density=1'
 
 # ---- parameter names and ranges ----
 def param.gradient-unknown 2 'youngs_modulos' 'unknown name in gradient --params' \
@@ -210,6 +232,10 @@ def param.sweep-syntax 2 '--param' 'sweep --param without :N' \
   'obs; fixture ball.json' 'ssc sweep ball.json --observations obs --param youngs_modulus=1000:2000 --out out'
 def param.sweep-log-negative 2 '--log' 'sweep --log over a negative range' \
   'obs; fixture ball.json' 'ssc sweep ball.json --observations obs --param gravity.y=-10:-9:3 --log --out out'
+def param.sweep-baseline-truth 2 '--truth' 'sweep --cost disp without --truth' \
+  'obs; fixture ball.json' 'ssc sweep ball.json --observations obs --param youngs_modulus=4000:6000:2 --cost disp --out out'
+def param.fit-fd-unknown 1 'gradient' 'reconstruct --gradient bogus' \
+  'obs; fixture ball.json' 'ssc reconstruct ball.json --observations obs --fit youngs_modulus --gradient bogus --out out'
 def probe.syntax 2 '--probe' '--probe with two numbers' \
   'fixture ball.json' 'ssc simulate ball.json --out out --probe 0,0.15'
 def probe.outside 2 'probe' '--probe point outside the body' \
@@ -220,7 +246,7 @@ def body.inside-ground 2 'ground' 'sphere that starts half inside the ground' \
   'scene ball.json scene.json "\"position\": [0, 0.15, 0]" "\"position\": [0, 0.05, 0]"' "$SIM"
 def body.coarse-torus-3 2 'too coarse && grid.resolution' 'thin torus on a grid of resolution 3 (loses most of its volume)' \
   'scene torus.json scene.json "\"resolution\": 30" "\"resolution\": 3"' "$SIM"
-def body.coarse-torus-2 2 'too coarse' 'thin torus on a grid of resolution 2' \
+def body.coarse-torus-2 2 'scene.json && grid.resolution' 'thin torus on a grid of resolution 2' \
   'scene torus.json scene.json "\"resolution\": 30" "\"resolution\": 2"' "$SIM"
 def match.far-away 2 'observed points' 'observations of the ball, scene moved 5 m aside (no point matches)' \
   'obs; fixture ball.json' 'ssc gradient ball.json --observations obs --set object.position=[5,0.15,0]'
@@ -230,11 +256,11 @@ def match.reconstruct-far 2 'observed points' 'reconstruct against observations 
   'obs; fixture ball.json' 'ssc reconstruct ball.json --observations obs --fit youngs_modulus --starts 2 --iterations 2 --out out --set object.position=[5,0.15,0]'
 
 # ---- simulations that fail ----
-def sim.stiff-ground 3 'step' 'ground stiffness 1e12 with dt 0.02 (explodes)' \
+def sim.stiff-ground 3 'simulation failed && step' 'ground stiffness 1e12 with dt 0.02 (explodes)' \
   'scene ball.json scene.json "\"stiffness\": 100000" "\"stiffness\": 1e12" "\"steps\": 4" "\"steps\": 20"' "$SIM"
-def sim.launched 3 'step' 'body thrown at the ground at 1e6 m/s' \
+def sim.launched 3 'simulation failed && step' 'body thrown at the ground at 1e6 m/s' \
   'scene ball.json scene.json "\"linear_velocity\": [0, 0, 0]" "\"linear_velocity\": [0, -1e6, 0]"' "$SIM"
-def sim.energy-gain 3 'energy' 'stiff soft-min contact (k 1e9, alpha 2e4, dt 1/600), cube dropped at 1.1 m/s' \
+def sim.energy-gain 3 'simulation failed && gained energy' 'stiff soft-min contact (k 1e9, alpha 2e4, dt 1/600), cube dropped at 1.1 m/s' \
   'cat > scene.json <<EOF
 { "object": { "primitive": "box", "half_extents": [0.1, 0.1, 0.1], "position": [0, 0.102, 0] },
   "grid": { "resolution": 4 },
@@ -242,35 +268,39 @@ def sim.energy-gain 3 'energy' 'stiff soft-min contact (k 1e9, alpha 2e4, dt 1/6
   "ground": { "height": 0, "stiffness": 1e9, "softmin_alpha": 2e4 },
   "time": { "dt": 0.0016666666666666668, "steps": 40 } }
 EOF' "$SIM"
-def sim.solver-limit 3 'step' 'CG limited to 1 iteration per step' \
+def sim.solver-limit 3 'simulation failed && step && max_iterations' 'CG limited to 1 iteration per step' \
   'scene ball.json scene.json "\"time\"" "\"solver\": { \"max_iterations\": 1, \"tolerance\": 1e-12 }, \"time\""' "$SIM"
 
 # ---- output folders ----
-def out.dot 2 '--out .' '--out . (the working folder)' \
+def out.dot 2 '--out . && working folder' '--out . (the working folder)' \
   'fixture ball.json' 'ssc simulate ball.json --out .'
-def out.dotdot 2 '--out ..' '--out .. (a parent of the working folder)' \
+def out.dotdot 2 '--out .. && working folder' '--out .. (a parent of the working folder)' \
   'fixture ball.json' 'ssc simulate ball.json --out ..'
-def out.root 2 '--out /' '--out /' \
+def out.root 2 '--out / && root' '--out /' \
   'fixture ball.json' 'ssc simulate ball.json --out /'
-def out.home 2 'home' '--out $HOME (HOME set to a scratch folder)' \
+def out.home 2 'home folder' '--out $HOME (HOME set to a scratch folder)' \
   'fixture ball.json; mkdir home; echo mine > home/precious.txt' 'HOME=$PWD/home ssc simulate ball.json --out "$PWD/home"'
 def out.empty-name 2 '--out' '--out with an empty name' \
   'fixture ball.json' 'ssc simulate ball.json --out ""'
-def out.file 2 'precious.txt' '--out an existing file' \
+def out.file 2 'precious.txt && is a file' '--out an existing file' \
   'fixture ball.json' 'ssc simulate ball.json --out precious.txt'
-def out.user-folder 2 'data' '--out a folder with user files and no ssc.json' \
+def out.user-folder 2 '--out data && did not make' '--out a folder with user files and no ssc.json' \
   'fixture ball.json; mkdir data; echo mine > data/precious.txt' 'ssc simulate ball.json --out data'
-def out.fake-manifest 2 'data' '--out a user folder whose ssc.json is not an ssc manifest' \
+def out.fake-manifest 2 '--out data && did not make' '--out a user folder whose ssc.json is not an ssc manifest' \
   'fixture ball.json; mkdir data; echo mine > data/precious.txt; echo "{\"ssc_output\": false}" > data/ssc.json' 'ssc simulate ball.json --out data'
-def out.symlink 2 'link' '--out a symbolic link to a folder' \
-  'fixture ball.json; mkdir data; echo mine > data/precious.txt; ln -s data link' 'ssc simulate ball.json --out link'
-def out.scene-folder 2 'in' '--out the folder holding the scene (an earlier ssc output)' \
+def out.symlink 2 '--out link && symbolic link' '--out a symbolic link to an earlier ssc output' \
+  'fixture ball.json; ssc simulate ball.json --out prev --no-frames 2>/dev/null && echo mine > prev/precious.txt && ln -s prev link' 'ssc simulate ball.json --out link'
+def out.kernels-dot 2 '--out . && working folder' 'kernels --out . (every command that writes checks its --out)' \
+  'fixture ball.json' 'ssc kernels ball.json --out . --no-compile'
+def out.observe-user-folder 2 '--out data' 'observe --out a folder with user files' \
+  'fixture ball.json; mkdir data; echo mine > data/precious.txt' 'ssc observe ball.json --out data'
+def out.scene-folder 2 '--out in && in/ball.json' '--out the folder holding the scene (an earlier ssc output)' \
   'fixture ball.json; ssc simulate ball.json --out in --no-frames 2>/dev/null && mv ball.json in/ && echo mine > in/precious.txt' 'ssc simulate in/ball.json --out in'
-def out.observations 2 'obs' 'sweep --out the observation folder it reads' \
+def out.observations 2 '--out obs && holds the input' 'sweep --out the observation folder it reads' \
   'obs; fixture ball.json' 'ssc sweep ball.json --observations obs --param youngs_modulus=4000:6000:2 --out obs'
-def out.observations-parent 2 'runs' 'reconstruct --out a parent of the observation folder (an earlier ssc output)' \
+def out.observations-parent 2 '--out runs && runs/obs' 'reconstruct --out a parent of the observation folder (an earlier ssc output)' \
   'fixture ball.json; ssc simulate ball.json --out runs --no-frames 2>/dev/null && obs runs/obs' 'ssc reconstruct ball.json --observations runs/obs --fit youngs_modulus --starts 1 --iterations 1 --out runs'
-def out.locked 2 'another ssc run' 'a second run on an --out that a running ssc holds' \
+def out.locked 2 '--out out && another ssc run' 'a second run on an --out that a running ssc holds' \
   'fixture ball.json' 'set -m; ssc simulate ball.json --out out '"$SLOW"' 2>/dev/null & p=$!; track $p; wait_for out.lock || exit 99; ssc simulate ball.json --out out; rc=$?; kill -TERM $p; wait $p; exit $rc'
 def signal.term 143 'SIGTERM' 'simulate stopped with SIGTERM: no OUT, no OUT.tmp-PID, no OUT.lock left' \
   'fixture ball.json' 'set -m; ssc simulate ball.json --out out '"$SLOW"' & p=$!; track $p; wait_for out.lock || exit 99; sleep 1; kill -TERM $p; wait $p'
@@ -280,9 +310,9 @@ def signal.term-replace 143 'SIGTERM' 'SIGTERM while replacing an earlier output
   'fixture ball.json; ssc simulate ball.json --out out --no-frames 2>/dev/null' 'set -m; ssc simulate ball.json --out out '"$SLOW"' & p=$!; track $p; wait_for out.tmp-$p || exit 99; sleep 0.5; kill -TERM $p; wait $p'
 
 # ---- GPU ----
-def gpu.simulate 4 'GPU' 'simulate --device cuda without a GPU' \
+def gpu.simulate 4 'GPU error' 'simulate --device cuda without a GPU' \
   'fixture ball.json' 'ssc simulate ball.json --out out --device cuda'
-def gpu.gradient 4 'GPU' 'gradient --device cuda without a GPU' \
+def gpu.gradient 4 'GPU error' 'gradient --device cuda without a GPU' \
   'obs; fixture ball.json' 'ssc gradient ball.json --observations obs --device cuda'
 
 # ---- usage errors (CLI11) ----
