@@ -48,8 +48,8 @@ SdfGrid make_grid_for_bounds(const Eigen::AlignedBox3d& world_bounds, double cel
   if (!fits(n)) {
     throw InputError(fmt::format(
         "a grid with cell_size {} m around the shape's bounds ({:.4g} x {:.4g} x {:.4g} m) "
-        "needs {:.0f} x {:.0f} x {:.0f} = {:.1f} million nodes; the limit is {} per axis and "
-        "{} million in all. Raise cell_size to at least {:.4g}",
+        "needs {:.3g} x {:.3g} x {:.3g} = {:.3g} million nodes; the limit is {} per axis and "
+        "{} million in all. Raise grid.cell_size to at least {:.4g} (or lower grid.resolution)",
         cell_size, world_bounds.sizes().x(), world_bounds.sizes().y(), world_bounds.sizes().z(),
         n.x(), n.y(), n.z(), n.prod() / 1e6, kMaxGridNodesPerAxis, kMaxGridNodes / 1'000'000,
         smallest_fitting_cell_size(world_bounds, cell_size, border_cells)));

@@ -227,7 +227,7 @@ SimGrid build_sim_grid(SdfGrid sdf, const GridOptions& options, const std::strin
   find_active_cells(g);
   if (g.cell_count == 0)
     throw InputError(fmt::format("{}: the object has no grid node with a negative SDF value, so there is "
-                                 "nothing to simulate; check the object's size and grid.cell_size",
+                                 "nothing to simulate; check the object's size, and lower grid.cell_size (or raise grid.resolution)",
                                  source));
   integrate_cells(g, options);
   build_node_cell_incidence(g);

@@ -129,6 +129,10 @@ void remove_unfinished_outputs() {
 
 OutputDir::OutputDir(const std::string& target, const std::vector<std::string>& protected_inputs) : target_(target) {
   if (target.empty()) throw InputError("--out: the output folder name is empty; give a folder to write");
+  fs::path given = fs::absolute(target).lexically_normal();
+  if (!given.has_filename() && given != given.root_path()) given = given.parent_path();
+  std::error_code link_ec;
+  if (fs::is_symlink(fs::symlink_status(given, link_ec))) refuse(target, "is a symbolic link");
   const fs::path t = absolute_normal(target);
   check_target(target, t, protected_inputs);
   std::error_code ec;

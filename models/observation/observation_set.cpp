@@ -412,9 +412,14 @@ ObservationSet read_observations(const std::string& dir) {
   const fs::path folder(dir);
   const fs::path json_path = folder / "cameras.json";
   std::error_code ec;
+  if (fs::exists(folder, ec) && !fs::is_directory(folder, ec))
+    throw InputError(fmt::format("{}: is a file, not a folder; give the observation folder that holds cameras.json "
+                                 "and the depth PNGs", dir));
   if (!fs::is_directory(folder, ec))
     throw InputError(fmt::format("{}: observation folder does not exist; give the folder that holds "
                                  "cameras.json and the depth PNGs", dir));
+  if (fs::is_directory(json_path, ec))
+    throw InputError(fmt::format("{}: is a folder; cameras.json must be a JSON file ({})", json_path.string(), kDocs));
   if (!fs::exists(json_path, ec))
     throw InputError(fmt::format("{}: missing cameras.json; an observation folder needs it ({})",
                                  json_path.string(), kDocs));

@@ -21,7 +21,7 @@ static double resolve_cell_size(const Scene& scene, const Eigen::AlignedBox3d& b
   return bounds.sizes().maxCoeff() / resolution;
 }
 
-SdfGrid build_rest_sdf(const Scene& scene) {
+static SdfGrid build_rest_sdf_unnamed(const Scene& scene) {
   const ObjectSpec& o = scene.object;
   switch (o.kind) {
     case ObjectSpec::Kind::Primitive:
@@ -36,6 +36,16 @@ SdfGrid build_rest_sdf(const Scene& scene) {
     }
   }
   throw InputError(scene.file + ": unknown object kind");
+}
+
+SdfGrid build_rest_sdf(const Scene& scene) {
+  try {
+    return build_rest_sdf_unnamed(scene);
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    if (what.rfind(scene.file, 0) == 0 || (!scene.object.path.empty() && what.find(scene.object.path) != std::string::npos)) throw;
+    throw InputError(scene.file + ": " + what);  // name the scene the grid comes from
+  }
 }
 
 double primitive_volume(const Primitive& p) {
@@ -54,17 +64,18 @@ double primitive_volume(const Primitive& p) {
   return 0;
 }
 
-// The enclosed volume of a closed mesh (divergence theorem), or 0 for an open one.
-static double closed_mesh_volume(const TriangleMesh& mesh, double scale) {
+// The enclosed volume of a closed mesh (divergence theorem), or 0 for an open one, whose
+// boundary edges (edges of one face) are counted into *boundary.
+static double closed_mesh_volume(const TriangleMesh& mesh, double scale, int* boundary) {
   std::map<std::pair<int, int>, int> edges;
   double v = 0;
   for (const Eigen::Vector3i& f : mesh.faces) {
     for (int e = 0; e < 3; ++e) ++edges[std::minmax(f[e], f[(e + 1) % 3])];
     v += mesh.vertices[f[0]].dot(mesh.vertices[f[1]].cross(mesh.vertices[f[2]])) / 6;
   }
-  for (const auto& [edge, count] : edges)
-    if (count != 2) return 0;
-  return std::abs(v) * std::pow(scale, 3);
+  *boundary = 0;
+  for (const auto& [edge, count] : edges) *boundary += count == 1;
+  return *boundary > 0 ? 0 : std::abs(v) * std::pow(scale, 3);
 }
 
 SimGrid build_body_grid(const Scene& scene) {
@@ -72,7 +83,15 @@ SimGrid build_body_grid(const Scene& scene) {
   SimGrid grid = build_sim_grid(build_rest_sdf(scene), scene.grid, source);
   double reference = 0;
   if (scene.object.kind == ObjectSpec::Kind::Primitive) reference = primitive_volume(scene.object.primitive);
-  if (scene.object.kind == ObjectSpec::Kind::Mesh) reference = closed_mesh_volume(load_mesh(scene.object.path), scene.object.transform.scale);
+  if (scene.object.kind == ObjectSpec::Kind::Mesh) {
+    int boundary = 0;
+    reference = closed_mesh_volume(load_mesh(scene.object.path), scene.object.transform.scale, &boundary);
+    if (boundary > 0)
+      warn("open_mesh", fmt::format("{}: the mesh is open ({} edges belong to one face only); its inside is inferred from "
+                                    "winding numbers, which fills small holes of a scan but guesses across large ones. "
+                                    "The body holds {:.4g} m^3: check it, or close the mesh",
+                                    scene.object.path, boundary, grid.total_volume));
+  }
   if (reference > 0) {
     const double lost = 1 - grid.total_volume / reference;
     const std::string what = fmt::format(

@@ -127,9 +127,9 @@ bool apply_parameter_override(nlohmann::json& config, const std::string& given, 
   int axis = 0;
   const bool scalar = scalar_field(probe, name) != nullptr;
   const bool component = vector_component(probe, name, &axis) != nullptr;
-  const bool plane = name.rfind("ground.", 0) == 0 && name != "ground.height" &&
+  const bool plane = name.rfind("ground.", 0) == 0 &&
                      (name.find("polar_deg") != std::string::npos || name.find("azimuth_deg") != std::string::npos ||
-                      name.rfind("ground.planes[", 0) == 0);
+                      given.rfind("ground.planes[", 0) == 0);
   if (!scalar && !component && !plane) return false;
   if (!value.is_number())
     throw InputError(fmt::format("{}: --set {}: must be a number, found {}", file, given, value.dump()));

@@ -65,6 +65,8 @@ ObjectSpec read_object(const JsonReader& r, const std::string& directory) {
     o.path = p.is_absolute() ? rel : (std::filesystem::path(directory) / p).lexically_normal().string();
     if (!std::filesystem::exists(o.path))
       r.fail(sdf ? "sdf_file" : "mesh", fmt::format("names '{}', which does not exist (paths are relative to the scene file)", o.path));
+    if (std::filesystem::is_directory(o.path))
+      r.fail(sdf ? "sdf_file" : "mesh", fmt::format("names '{}', which is a folder; give the file", o.path));
     if (sdf && o.transform.rotation_deg.norm() != 0)
       r.fail("rotation_deg", "is not supported for sdf_file objects (the grid is given by the file); rotate the source instead");
   }

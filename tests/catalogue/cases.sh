@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # The bad-input catalogue of ssc, read by run-catalogue.sh (docs/errors.md is its table).
 #
 #   def ID EXIT 'STDERR SUBSTRING[ && ANOTHER]' 'DESCRIPTION' 'SETUP' 'COMMAND' [FLAGS]
@@ -136,8 +137,8 @@ def mesh.obj-empty 2 'cube.obj' 'empty OBJ file' \
   'fixture mesh.json; : > cube.obj' 'ssc simulate mesh.json --out out'
 def mesh.obj-flat 2 'cube.obj' 'OBJ of one triangle (no volume)' \
   'fixture mesh.json; printf "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n" > cube.obj' 'ssc simulate mesh.json --out out'
-def mesh.obj-open 2 'cube.obj' 'OBJ cube with three of its six faces missing (open: no inside)' \
-  'fixture mesh.json; head -n 15 "$FIX/cube.obj" > cube.obj' 'ssc simulate mesh.json --out out'
+def mesh.obj-open 0 'warning && cube.obj && open' 'OBJ cube with three of its six faces missing: a warning that the mesh is open, recorded in summary.json' \
+  'fixture mesh.json; head -n 15 "$FIX/cube.obj" > cube.obj' 'ssc simulate mesh.json --out out --no-frames && grep -q open_mesh out/summary.json || { echo "catalogue: no open_mesh warning in out/summary.json" >&2; exit 98; }' writes
 def mesh.ply-truncated 2 'cube.ply' 'ASCII PLY cut off after 3 of 8 vertices' \
   'scene mesh.json mesh.json cube.obj cube.ply; head -n 12 "$FIX/cube.ply" > cube.ply' 'ssc simulate mesh.json --out out'
 def mesh.ply-garbage 2 'cube.ply' 'PLY file without a PLY header' \

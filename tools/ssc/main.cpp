@@ -42,6 +42,18 @@ int main(int argc, char** argv) {
   add(ssc::register_sweep);
   add(ssc::register_reconstruct);
   add(ssc::register_kernels);
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string names;
+    bool known = false;
+    for (auto& [sub, run] : commands) {
+      known |= sub->get_name() == argv[1];
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::fprintf(stderr, "ssc: unknown command '%s'; the commands are %s (ssc --help)\n", argv[1], names.c_str());
+      return ssc::kExitUsage;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
