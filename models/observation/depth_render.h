@@ -4,7 +4,7 @@
 // the simulated surface and needs no advected SDF. A bounding volume hierarchy keeps it
 // fast (a 640x480 image of a 100k-triangle mesh in well under a second).
 //
-// Noise follows decision 7: a Gaussian with standard deviation noise_std_m metres is added
+// Noise follows decision 7 (docs/decisions.md): a Gaussian with standard deviation noise_std_m metres is added
 // to the distance along the viewing ray, then converted to the z depth the camera stores.
 // The noise of pixel (u, v) depends only on (seed, v, u): every image row has its own
 // std::mt19937_64 seeded from a hash of (seed, row), so images are bitwise reproducible
