@@ -1,8 +1,8 @@
 // Checks that keep a wrong simulation from passing as a result (docs/errors.md):
 //  - energy audit: the total energy (kinetic + elastic + gravitational + contact potential)
-//    may not rise above its value at the start by more than solver.energy_tolerance times
-//    the run's energy scale (initial kinetic energy + m |g| L + initial elastic and contact
-//    energy, L the rest body's diagonal); gravity is the only external force that does work
+//    may not rise above its value at the start (the rest shape: no elastic energy) by more
+//    than solver.energy_tolerance times the run's energy scale (initial kinetic and contact
+//    energy + m |g| L, L the rest body's diagonal); gravity is the only external force that does work
 //    (fixed nodes do not move), and Rayleigh damping, theta > 1/2 and the contact's damping
 //    term only remove energy, so a rise is the time integration going wrong (a contact too
 //    stiff for time.dt, or time.dt too large). SimulationError naming the step.
@@ -29,7 +29,7 @@ struct SimulationAudit {
   Eigen::AlignedBox3d rest_box;
   int inverted_cells = 0, first_inverted_step = -1;  // the most cells inverted at once, and when first
 
-  // Takes the start state's energy and extent.
+  // Takes the start state's energy and extent; the state must be the rest shape (u = 0).
   void start(const Simulation& sim, int b);
   // Throws SimulationError ("<when> <step>: ...") for energy gained or a node outside the region.
   void check(const Simulation& sim, int b, int step, const char* when);

@@ -70,6 +70,13 @@ class Simulation {
   Eigen::Vector3d angular_momentum(int b) const;  // about the origin
   double kinetic_energy(int b) const;
   double elastic_energy(int b) const;
+  // The corotated elastic energy and the number of cells with det F <= 0 at their centre, in
+  // one pass over the cells.
+  struct CellScan {
+    double elastic = 0;
+    int inverted = 0;
+  };
+  CellScan scan_cells(int b) const;
   double gravitational_energy(int b) const;  // -m g . x, zero at the origin
   double contact_energy(int b) const;        // the soft-min penalty's potential (ops/collision.h)
   int inverted_cell_count(int b) const;      // cells with det F <= 0 at their centre
