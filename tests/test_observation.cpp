@@ -470,14 +470,16 @@ TEST(ObservationTest, WriteThenReadIsBitwiseIdentical) {
   EXPECT_TRUE(fs::exists(tmp / "obs/side/d2.png"));
   EXPECT_TRUE(fs::exists(tmp / "obs/cam0/depth_0002.png"));
 
-  // Rewriting replaces the folder as a whole (a stale file disappears) and leaves no
-  // temporary siblings behind.
+  // A file the user put into the folder keeps it from being replaced; without it, rewriting
+  // replaces the folder as a whole (frame 2 disappears) and leaves no temporary siblings.
   spit(tmp / "obs/stale.txt", "old");
   ObservationSet two = set;
   two.frame_count = 2;
   two.frames.pop_back();
+  expect_input_error([&] { write_observations(dir + "/", two); }, {"stale.txt"});
+  EXPECT_TRUE(fs::exists(tmp / "obs/stale.txt"));
+  fs::remove(tmp / "obs/stale.txt");
   write_observations(dir + "/", two);
-  EXPECT_FALSE(fs::exists(tmp / "obs/stale.txt"));
   EXPECT_FALSE(fs::exists(tmp / "obs/cam0/depth_0002.png"));
   EXPECT_EQ(read_observations(dir).frame_count, 2);
   EXPECT_EQ(std::distance(fs::directory_iterator(tmp.path), fs::directory_iterator{}), 1);

@@ -946,7 +946,7 @@ class CliSimulate : public ::testing::Test {
   std::vector<std::string> leftovers() const {
     std::vector<std::string> out;
     for (const auto& e : fs::directory_iterator(dir_))
-      if (e.path().filename().string().find(".tmp-") != std::string::npos) out.push_back(e.path().string());
+      if (e.path().filename().string().find(".ssc-tmp-") != std::string::npos) out.push_back(e.path().string());
     return out;
   }
   fs::path dir_;

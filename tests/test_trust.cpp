@@ -47,11 +47,11 @@ TEST(OutputFolder, NewFolderAppearsWithItsManifestOnlyOnCommit) {
     spit(out.file("a.txt"), "1");
     out.manifest()["device"] = "cpu";
     EXPECT_FALSE(fs::exists(box / "run"));
-    EXPECT_TRUE(fs::exists(box / "run.lock"));
+    EXPECT_TRUE(fs::exists(box / ".run.ssc-lock"));
     out.commit();
   }
   EXPECT_EQ(slurp(box / "run/a.txt"), "1");
-  EXPECT_FALSE(fs::exists(box / "run.lock"));
+  EXPECT_FALSE(fs::exists(box / ".run.ssc-lock"));
   const json m = json::parse(slurp(box / "run/ssc.json"));
   EXPECT_EQ(m["ssc_output"], true);
   EXPECT_EQ(m["status"], "complete");
@@ -109,7 +109,23 @@ TEST(OutputFolder, RefusesWhatSscDidNotMake) {
   if (home && *home) expect_input_error([&] { OutputDir out(home); }, {"home folder"});
   EXPECT_EQ(slurp(box / "mine/precious.txt"), "keep");
   EXPECT_EQ(slurp(box / "file.txt"), "keep");
-  EXPECT_FALSE(fs::exists(box / "mine.lock"));
+  EXPECT_FALSE(fs::exists(box / ".mine.ssc-lock"));
+}
+
+TEST(OutputFolder, AUserFileInsideAnOutputKeepsItFromBeingReplaced) {
+  Sandbox box;
+  { OutputDir out(box / "run"); spit(out.file("a.txt"), "1"); out.commit(); }
+  spit(box / "run/notes.txt", "mine");
+  expect_input_error([&] { OutputDir out(box / "run"); }, {"notes.txt", "did not write"});
+  // ... also when it appears while the run is writing.
+  fs::remove(box / "run/notes.txt");
+  {
+    OutputDir out(box / "run");
+    spit(box / "run/notes.txt", "mine");
+    expect_input_error([&] { out.commit(); }, {"notes.txt"});
+  }
+  EXPECT_EQ(slurp(box / "run/notes.txt"), "mine");
+  EXPECT_EQ(slurp(box / "run/a.txt"), "1");
 }
 
 TEST(OutputFolder, ALockKeepsASecondWriterOff) {
@@ -122,14 +138,22 @@ TEST(OutputFolder, ALockKeepsASecondWriterOff) {
 TEST(OutputFolder, StaleTemporaryFoldersOfDeadRunsAreRemoved) {
   Sandbox box;
   // A process id that cannot be running: beyond the kernel's pid range.
-  const std::string stale = box / "run.tmp-99999999";
+  char host[256] = {0};
+  gethostname(host, sizeof host - 1);
+  const std::string stale = box / ".run.ssc-tmp-99999999";
   fs::create_directories(stale);
-  spit(stale + "/ssc.json", "{\"ssc_output\": true, \"status\": \"running\"}");
-  const std::string foreign = box / "run.tmp-99999998";  // not ssc's: left alone
+  spit(stale + "/ssc.json", json{{"ssc_output", true}, {"status", "running"}, {"pid", 99999999}, {"host", host}}.dump());
+  // Left alone: a folder that is not ssc's, and one whose manifest names another process
+  // (a user's copy named like ours).
+  const std::string foreign = box / ".run.ssc-tmp-99999998";
   fs::create_directories(foreign);
+  const std::string copy = box / ".run.ssc-old-99999997";
+  fs::create_directories(copy);
+  spit(copy + "/ssc.json", json{{"ssc_output", true}, {"pid", 12}, {"host", host}}.dump());
   { OutputDir out(box / "run"); out.commit(); }
   EXPECT_FALSE(fs::exists(stale));
   EXPECT_TRUE(fs::exists(foreign));
+  EXPECT_TRUE(fs::exists(copy));
 }
 
 TEST(OutputFolder, InterruptCleanupRemovesUnfinishedFolders) {
@@ -138,7 +162,7 @@ TEST(OutputFolder, InterruptCleanupRemovesUnfinishedFolders) {
   spit(out.file("partial"), "x");
   remove_unfinished_outputs();
   EXPECT_FALSE(fs::exists(out.path()));
-  EXPECT_FALSE(fs::exists(box / "run.lock"));
+  EXPECT_FALSE(fs::exists(box / ".run.ssc-lock"));
 }
 
 json falling_box(double stiffness, double alpha, double dt) {

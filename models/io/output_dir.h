@@ -2,17 +2,19 @@
 // file is ever lost to.
 //
 // Ownership: a folder is ssc's only if it holds a manifest, ssc.json, with "ssc_output":
-// true. The constructor refuses a target that is a file, a link, a folder with content but
-// no manifest, the filesystem root, the home folder, the working folder or one of its
-// parents, or a parent of (or the same path as) a protected input (the scene, the
-// observations). An empty folder is taken (nothing in it can be lost).
-// Atomicity: everything is written into the sibling NAME.tmp-PID, which holds its
-// manifest (status "running") from the start. commit() writes the final manifest and swaps
-// the folder into place with renameat2(RENAME_EXCHANGE) (the old one is then removed), or,
-// where the filesystem cannot exchange, by renaming the old folder aside first.
-// Concurrency: an flock on NAME.lock keeps two runs off one target; the lock file is
-// removed at the end. A stale NAME.tmp-PID or NAME.old-PID of a process that no longer
-// runs is removed by the next run for the same target.
+// true; the manifest lists the files the run wrote. The constructor refuses a target that is
+// a file, a link, a folder with content but no manifest or with files the manifest does not
+// list, the filesystem root, the home folder, the working folder or one of its parents, or a
+// parent of (or the same path as) a protected input (the scene, its mesh, the observations).
+// An empty folder is taken (nothing in it can be lost). commit() checks the target again.
+// Atomicity: everything is written into the hidden sibling .NAME.ssc-tmp-PID, which holds
+// its manifest (status "running", the process and host) from the start. commit() writes the
+// final manifest and swaps the folder into place with renameat2(RENAME_EXCHANGE) (the old one
+// is then removed), or, where the filesystem cannot exchange, by renaming the old folder
+// aside (.NAME.ssc-old-PID) first.
+// Concurrency: an flock on .NAME.ssc-lock keeps two runs off one target; the lock file is
+// removed at the end. A .NAME.ssc-tmp-PID or .NAME.ssc-old-PID whose manifest names a
+// process of this host that no longer runs is removed by the next run for the same target.
 // Interruption: every unfinished temporary folder and lock is registered, and
 // remove_unfinished_outputs() (called on SIGINT/SIGTERM, tools/ssc/interrupts.h) removes them.
 #pragma once
@@ -38,6 +40,7 @@ class OutputDir {
 
  private:
   void write_manifest(const std::string& status) const;
+  void release();  // removes the unfinished folder and the lock
   std::string target_, temp_, lock_;
   int lock_fd_ = -1;
   bool committed_ = false;

@@ -20,6 +20,7 @@
 #include <sstream>
 
 #include "models/io/errors.h"
+#include "models/io/text_file.h"
 #include "models/io/output_dir.h"
 #include "models/io/run_record.h"
 
@@ -200,14 +201,6 @@ nlohmann::ordered_json camera_json(const DepthCamera& cam, const std::string& pa
                                 {"depth_pattern", pattern}};
 }
 
-void write_text_file(const fs::path& path, const std::string& text) {
-  std::ofstream out(path, std::ios::binary);
-  out << text;
-  out.close();
-  if (!out) throw InputError(fmt::format("{}: cannot write the file; check that the folder is writable "
-                                         "and the disk not full", path.string()));
-}
-
 void write_header(const fs::path& folder, const ObservationSet& set, const std::vector<std::string>& patterns) {
   nlohmann::ordered_json j;
   j["format"] = kObservationFormat;
@@ -217,7 +210,7 @@ void write_header(const fs::path& folder, const ObservationSet& set, const std::
   j["first_frame_time"] = set.first_frame_time;
   j["cameras"] = nlohmann::ordered_json::array();
   for (std::size_t i = 0; i < set.cameras.size(); ++i) j["cameras"].push_back(camera_json(set.cameras[i], patterns[i]));
-  write_text_file(folder / "cameras.json", j.dump(2) + "\n");
+  write_text_file((folder / "cameras.json").string(), j.dump(2) + "\n");
 }
 
 void write_frames(const fs::path& folder, const ObservationSet& set, const std::vector<std::string>& patterns) {

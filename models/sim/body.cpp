@@ -64,18 +64,23 @@ double primitive_volume(const Primitive& p) {
   return 0;
 }
 
-// The enclosed volume of a closed mesh (divergence theorem), or 0 for an open one, whose
-// boundary edges (edges of one face) are counted into *boundary.
+// The enclosed volume of a closed, consistently wound mesh (divergence theorem), else 0;
+// *boundary counts the edges of one face only (an open mesh).
 static double closed_mesh_volume(const TriangleMesh& mesh, double scale, int* boundary) {
-  std::map<std::pair<int, int>, int> edges;
+  std::map<std::pair<int, int>, int> undirected, directed;
   double v = 0;
   for (const Eigen::Vector3i& f : mesh.faces) {
-    for (int e = 0; e < 3; ++e) ++edges[std::minmax(f[e], f[(e + 1) % 3])];
+    for (int e = 0; e < 3; ++e) {
+      ++undirected[std::minmax(f[e], f[(e + 1) % 3])];
+      ++directed[{f[e], f[(e + 1) % 3]}];
+    }
     v += mesh.vertices[f[0]].dot(mesh.vertices[f[1]].cross(mesh.vertices[f[2]])) / 6;
   }
   *boundary = 0;
-  for (const auto& [edge, count] : edges) *boundary += count == 1;
-  return *boundary > 0 ? 0 : std::abs(v) * std::pow(scale, 3);
+  for (const auto& [edge, count] : undirected) *boundary += count == 1;
+  bool consistent = true;
+  for (const auto& [edge, count] : directed) consistent &= count == 1 && directed.count({edge.second, edge.first}) == 1;
+  return *boundary > 0 || !consistent ? 0 : std::abs(v) * std::pow(scale, 3);
 }
 
 SimGrid build_body_grid(const Scene& scene) {

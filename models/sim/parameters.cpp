@@ -169,8 +169,8 @@ bool apply_parameter_override(nlohmann::json& config, const std::string& given, 
 }
 
 std::string parameter_set_argument(const PhysicalParameters& p, const std::string& name, double value) {
-  // The first plane's height is the scene key ground.height only without a planes list.
-  const std::string key = name == "ground.height" && p.planes.size() > 1 ? "ground.planes[0].height" : name;
+  // ground.height is the default of a planes list, not its first plane's: name the plane.
+  const std::string key = name == "ground.height" ? "ground.planes[0].height" : name;
   return fmt::format("{}={:.17g}", key, value);
 }
 

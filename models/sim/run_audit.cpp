@@ -21,7 +21,9 @@ void SimulationAudit::start(const Simulation& sim, int b) {
   // The start is the rest shape (no elastic energy): only the motion and the ground count.
   const double kinetic = sim.kinetic_energy(b), contact = sim.contact_energy(b);
   energy_start = kinetic + contact + sim.gravitational_energy(b);
-  energy_scale = kinetic + contact + sim.total_mass() * p.gravity.norm() * body_diagonal + 1e-12;
+  double volume = 0;
+  for (double v : g.node_volume) volume += v;
+  energy_scale = kinetic + contact + p.density * volume * p.gravity.norm() * body_diagonal + 1e-12;
   inverted_cells = 0;
   first_inverted_step = -1;
 }

@@ -391,7 +391,7 @@ namespace {
 
 // -Li2(-x) = integral_0^x ln(1 + t) / t dt = x - x^2/4 + x^3/9 - ... for 0 <= x <= 1: the
 // series where it converges fast (x <= 1/2; most contact points are far from the plane, x ~ 0),
-// else 8-point Gauss-Legendre (the integrand is analytic on [-1 + x, 1]: accurate to ~1e-9).
+// else 8-point Gauss-Legendre on [0, x] (the integrand is analytic for t > -1; about 1e-13).
 double minus_dilog_of_minus(double x) {
   if (x <= 0.5) {
     double s = 0, power = x;

@@ -291,6 +291,10 @@ def out.fake-manifest 2 '--out data && did not make' '--out a user folder whose 
   'fixture ball.json; mkdir data; echo mine > data/precious.txt; echo "{\"ssc_output\": false}" > data/ssc.json' 'ssc simulate ball.json --out data'
 def out.symlink 2 '--out link && symbolic link' '--out a symbolic link to an earlier ssc output' \
   'fixture ball.json; ssc simulate ball.json --out prev --no-frames 2>/dev/null && echo mine > prev/precious.txt && ln -s prev link' 'ssc simulate ball.json --out link'
+def out.user-file-in-output 2 '--out prev && precious.txt && did not write' '--out an earlier ssc output into which the user put a file of their own' \
+  'fixture ball.json; ssc simulate ball.json --out prev --no-frames 2>/dev/null && echo mine > prev/precious.txt' 'ssc simulate ball.json --out prev'
+def out.backup-named-like-ours 0 '' 'a backup of an earlier output named like ssc'"'"'s own temporary folder is never cleaned up' \
+  'fixture ball.json; ssc simulate ball.json --out prev --no-frames 2>/dev/null && cp -r prev .prev.ssc-old-99999999 && echo mine > .prev.ssc-old-99999999/precious.txt' 'ssc simulate ball.json --out prev --no-frames && test -f .prev.ssc-old-99999999/precious.txt' writes
 def out.kernels-dot 2 '--out . && working folder' 'kernels --out . (every command that writes checks its --out)' \
   'fixture ball.json' 'ssc kernels ball.json --out . --no-compile'
 def out.observe-user-folder 2 '--out data' 'observe --out a folder with user files' \
@@ -302,13 +306,13 @@ def out.observations 2 '--out obs && holds the input' 'sweep --out the observati
 def out.observations-parent 2 '--out runs && runs/obs' 'reconstruct --out a parent of the observation folder (an earlier ssc output)' \
   'fixture ball.json; ssc simulate ball.json --out runs --no-frames 2>/dev/null && obs runs/obs' 'ssc reconstruct ball.json --observations runs/obs --fit youngs_modulus --starts 1 --iterations 1 --out runs'
 def out.locked 2 '--out out && another ssc run' 'a second run on an --out that a running ssc holds' \
-  'fixture ball.json' 'set -m; ssc simulate ball.json --out out '"$SLOW"' 2>/dev/null & p=$!; track $p; wait_for out.lock || exit 99; ssc simulate ball.json --out out; rc=$?; kill -TERM $p; wait $p; exit $rc'
-def signal.term 143 'SIGTERM' 'simulate stopped with SIGTERM: no OUT, no OUT.tmp-PID, no OUT.lock left' \
-  'fixture ball.json' 'set -m; ssc simulate ball.json --out out '"$SLOW"' & p=$!; track $p; wait_for out.lock || exit 99; sleep 1; kill -TERM $p; wait $p'
+  'fixture ball.json' 'set -m; ssc simulate ball.json --out out '"$SLOW"' 2>/dev/null & p=$!; track $p; wait_for .out.ssc-lock || exit 99; ssc simulate ball.json --out out; rc=$?; kill -TERM $p; wait $p; exit $rc'
+def signal.term 143 'SIGTERM' 'simulate stopped with SIGTERM: no OUT, no .OUT.ssc-tmp-PID, no .OUT.ssc-lock left' \
+  'fixture ball.json' 'set -m; ssc simulate ball.json --out out '"$SLOW"' & p=$!; track $p; wait_for .out.ssc-lock || exit 99; sleep 1; kill -TERM $p; wait $p'
 def signal.int 130 'SIGINT' 'simulate stopped with SIGINT (Ctrl-C): nothing left behind' \
-  'fixture ball.json' 'set -m; ssc simulate ball.json --out out '"$SLOW"' & p=$!; track $p; wait_for out.lock || exit 99; sleep 1; kill -INT $p; wait $p'
+  'fixture ball.json' 'set -m; ssc simulate ball.json --out out '"$SLOW"' & p=$!; track $p; wait_for .out.ssc-lock || exit 99; sleep 1; kill -INT $p; wait $p'
 def signal.term-replace 143 'SIGTERM' 'SIGTERM while replacing an earlier output: the earlier one stays as it was' \
-  'fixture ball.json; ssc simulate ball.json --out out --no-frames 2>/dev/null' 'set -m; ssc simulate ball.json --out out '"$SLOW"' & p=$!; track $p; wait_for out.tmp-$p || exit 99; sleep 0.5; kill -TERM $p; wait $p'
+  'fixture ball.json; ssc simulate ball.json --out out --no-frames 2>/dev/null' 'set -m; ssc simulate ball.json --out out '"$SLOW"' & p=$!; track $p; wait_for .out.ssc-tmp-$p || exit 99; sleep 0.5; kill -TERM $p; wait $p'
 
 # ---- GPU ----
 def gpu.simulate 4 'GPU error' 'simulate --device cuda without a GPU' \

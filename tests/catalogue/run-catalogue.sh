@@ -15,7 +15,7 @@
 #   - the exit code is the expected one,
 #   - stderr contains every expected substring (case-insensitive; parts joined by " && "),
 #   - every file and folder under CASE/ (the working folder, its parent, any sibling such as
-#     OUT.tmp-PID or OUT.lock) is byte-identical before and after the command: no output folder
+#     hidden .OUT.ssc-tmp-PID or .OUT.ssc-lock) is byte-identical before and after the command: no output folder
 #     was created or changed (a case marked `writes` may add files; it must still keep the
 #     sentinels), and precious.txt still holds what the test wrote.
 # A case marked `pending` (the behaviour is planned, not implemented yet) is run and reported,

@@ -12,6 +12,7 @@
 #include "codegen/cuda_source.h"
 #include "codegen/kernel_plan.h"
 #include "models/io/errors.h"
+#include "models/io/text_file.h"
 #include "models/io/output_dir.h"
 #include "models/io/run_record.h"
 #include "models/sim/scene.h"
@@ -21,13 +22,6 @@
 
 namespace ssc {
 namespace {
-
-void write_text(const std::string& path, const std::string& text) {
-  std::ofstream f(path);
-  f << text;
-  f.close();
-  if (!f) throw InputError(fmt::format("{}: cannot write the file; is the disk full?", path));
-}
 
 struct KernelsOptions {
   std::string scene, out, arch = "sm_90", real = "double";
@@ -39,20 +33,20 @@ int run_kernels(const KernelsOptions& o) {
   namespace fs = std::filesystem;
   if (o.real != "double" && o.real != "float") throw InputError("--real must be float or double, not " + o.real);
   const Scene scene = load_scene(o.scene, o.overrides);
-  OutputDir out(o.out, {o.scene});
+  OutputDir out(o.out, {o.scene, scene.object.path});
   out.manifest()["scene"] = {{"file", o.scene}, {"resolved", scene.resolved}};
   out.manifest()["arch"] = o.arch;
   out.manifest()["real"] = o.real;
   const TimestepGraph t = build_timestep_graph(int(scene.planes.size()), o.extension);
   const KernelPlan plan = plan_kernels(t.graph);
   fs::create_directories(fs::path(out.file("kernels")));
-  write_text(out.file("graph.txt"), t.graph.describe());
-  write_text(out.file("plan.txt"), plan.text(t.graph));
+  write_text_file(out.file("graph.txt"), t.graph.describe());
+  write_text_file(out.file("plan.txt"), plan.text(t.graph));
   const CodegenOptions co{o.real, 128};
   std::vector<KernelSource> sources;
   for (const PlannedKernel* k : plan.unique_kernels()) {
     sources.push_back({k->name, kernel_source(*k, co)});
-    write_text(out.file("kernels/" + k->name + ".cu"), sources.back().source);
+    write_text_file(out.file("kernels/" + k->name + ".cu"), sources.back().source);
   }
   std::printf("%s: %zu forward and %zu adjoint launches per step, %zu distinct kernels (Real = %s)\n",
               scene.file.c_str(), plan.forward.size(), plan.adjoint.size(), sources.size(), o.real.c_str());
@@ -81,7 +75,7 @@ int run_kernels(const KernelsOptions& o) {
     table += fmt::format("{:<58} {:>5} {:>6} {:>6} {:>7} {:>7} {:>9}\n", k.name, r.registers, r.shared_bytes, r.stack_bytes,
                          r.spill_store_bytes, r.spill_load_bytes, k.from_cache ? "cached" : fmt::format("{:.0f} ms", k.compile_ms));
   }
-  write_text(out.file("resources.txt"), table);
+  write_text_file(out.file("resources.txt"), table);
   std::printf("\n%s", table.c_str());
   std::printf("\n%zu kernels for %s (%s, NVRTC %s): %.2f s wall, %d from the cache (%s)\n", compiled.size(),
               o.arch.c_str(), std::all_of(compiled.begin(), compiled.end(), [](const CompiledKernel& k) { return k.is_cubin; }) ? "CUBIN" : "PTX fallback", nvrtc_version().c_str(), secs, cached,

@@ -30,7 +30,7 @@ Command register_observe(CLI::App& app) {
   return [o] {
     const Scene scene = load_scene(o->scene, o->overrides);
     const ObservationSpec spec = parse_observation_spec(scene);
-    OutputDir out(o->out, {o->scene});
+    OutputDir out(o->out, {o->scene, scene.object.path});
     out.manifest()["scene"] = {{"file", o->scene}, {"resolved", scene.resolved}};
     const SimGrid grid = build_body_grid(scene);
     Progress progress("observe: frame", scene.time.steps / spec.every + 1, o->progress);

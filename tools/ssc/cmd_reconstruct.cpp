@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "models/io/errors.h"
+#include "models/io/text_file.h"
 #include "models/io/output_dir.h"
 #include "models/io/svg_plot.h"
 #include "models/optim/reconstruction.h"
@@ -33,13 +34,6 @@ nlohmann::json named(const std::vector<std::string>& names, const Eigen::VectorX
   nlohmann::json j = nlohmann::json::object();
   for (size_t i = 0; i < names.size() && i < size_t(v.size()); ++i) j[names[i]] = v[i];
   return j;
-}
-
-void write_text(const OutputDir& out, const std::string& name, const std::string& text) {
-  std::ofstream f(out.file(name));
-  f << text;
-  f.close();
-  if (!f) throw InputError(fmt::format("cannot write {}; is the disk full?", out.file(name)));
 }
 
 void write_convergence_plots(const OutputDir& out, const ReconstructionResult& r) {
@@ -209,7 +203,7 @@ Command register_reconstruct(CLI::App& app) {
     make_optimizer(ro.optimizer, Eigen::VectorXd::Zero(1), ro.optimizer_options);  // reject unknown names early
     const PhysicalParameters nominal = PhysicalParameters::from_scene(problem.scene);
     const std::vector<std::string> names = expand_parameter_names(ro.fit, nominal);
-    OutputDir out(o->out, {o->scene, o->observations});
+    OutputDir out(o->out, {o->scene, o->observations, problem.scene.object.path});
     out.manifest()["scene"] = {{"file", o->scene}, {"resolved", problem.scene.resolved}};
     out.manifest()["observations"] = folder_fingerprint(o->observations);
     out.manifest()["device"] = device == "cuda" ? gpu_description() : "cpu";
@@ -249,7 +243,6 @@ Command register_reconstruct(CLI::App& app) {
     j["evaluations"] = r.evaluations;
     j["wall_seconds"] = r.wall_seconds;
     j["device"] = device == "cuda" ? gpu_description() : "cpu";
-    j["warnings"] = warnings_json();
     nlohmann::json starts = nlohmann::json::array();
     std::string csv = "start,iteration,cost";
     for (const std::string& n : r.names) csv += "," + n;
@@ -279,11 +272,11 @@ Command register_reconstruct(CLI::App& app) {
       starts.push_back(e);
     }
     j["starts"] = starts;
-    write_text(out, "result.json", j.dump(2) + "\n");
-    write_text(out, "history.csv", csv);
     write_convergence_plots(out, r);
     const std::vector<std::string> renders = write_fit_renders(out, problem, r.names, best.final);
-    out.manifest()["warnings"] = warnings_json();
+    j["warnings"] = warnings_json();  // all of the run's, the renders' included
+    write_text_file(out.file("result.json"), j.dump(2) + "\n");
+    write_text_file(out.file("history.csv"), csv);
     out.commit();
     print_report(r, j["convergence"]);
     std::printf("wrote %s: result.json, history.csv, convergence.svg, %zu renders (%.1f s)\n", o->out.c_str(), renders.size(),

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "models/io/errors.h"
+#include "models/io/text_file.h"
 #include "models/io/output_dir.h"
 #include "models/io/ply_writer.h"
 #include "models/io/run_record.h"
@@ -61,7 +62,7 @@ nlohmann::json frame_record(const Simulation& sim, int frame, const std::vector<
 int run_simulate(const SimulateOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   const Scene scene = load_scene(o.scene, o.overrides);
-  OutputDir out(o.out, {o.scene});
+  OutputDir out(o.out, {o.scene, scene.object.path});
   out.manifest()["scene"] = {{"file", o.scene}, {"resolved", scene.resolved}};
   std::vector<Eigen::Vector3d> probes;
   for (const std::string& p : o.probes) probes.push_back(parse_probe(p));
@@ -115,11 +116,7 @@ int run_simulate(const SimulateOptions& o) {
   summary["seconds_per_step"] = scene.time.steps > 0 ? sim_seconds / scene.time.steps : 0.0;
   summary["warnings"] = warnings_json();
   summary["wall_seconds"] = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  {
-    std::ofstream f(out.file("summary.json"));
-    f << summary.dump(2) << "\n";
-    if (!f) throw InputError(fmt::format("{}: cannot write summary.json", o.out));
-  }
+  write_text_file(out.file("summary.json"), summary.dump(2) + "\n");
   out.commit();
   std::printf("wrote %s (%d frames, %.2f ms per step)\n", o.out.c_str(), scene.time.steps + 1,
               1e3 * summary["seconds_per_step"].get<double>());

@@ -7,6 +7,7 @@
 
 #include "models/cost/baselines.h"
 #include "models/io/errors.h"
+#include "models/io/text_file.h"
 #include "models/io/output_dir.h"
 #include "models/io/svg_plot.h"
 #include "models/sim/parameters.h"
@@ -69,7 +70,7 @@ Command register_sweep(CLI::App& app) {
     SweepRange range = parse_range(o->param);
     if (o->log && (range.lo <= 0 || range.hi <= 0)) throw InputError("--log needs positive LO and HI");
     const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max);
-    OutputDir out(o->out, {o->scene, o->observations});
+    OutputDir out(o->out, {o->scene, o->observations, problem.scene.object.path});
     out.manifest()["scene"] = {{"file", o->scene}, {"resolved", problem.scene.resolved}};
     out.manifest()["observations"] = folder_fingerprint(o->observations);
     Simulation sim(problem.scene, problem.grid, 1, true);
@@ -120,11 +121,7 @@ Command register_sweep(CLI::App& app) {
     }
     progress.finish();
     if (o->cost == "ssc") check_matches(best_matches, o->observations, "the sweep's best-matching sample");
-    {
-      std::ofstream f(out.file("sweep.csv"));
-      f << csv;
-      if (!f) throw InputError(o->out + ": cannot write sweep.csv");
-    }
+    write_text_file(out.file("sweep.csv"), csv);
     const std::string unit = parameter_unit(range.name);
     const std::string cost_name = o->cost == "ssc" ? "J_SSC" : o->cost == "disp" ? "J_disp" : "J_SDF";
     PlotPanel cost_panel{"cost " + cost_name, fmt::format("{} [{}]", range.name, unit), "cost", o->log, false, false, {}, {}};

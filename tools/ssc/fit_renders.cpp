@@ -9,6 +9,7 @@
 
 #include "models/cost/surface_constraint.h"
 #include "models/io/errors.h"
+#include "models/io/text_file.h"
 #include "models/observation/camera.h"
 #include "models/sim/deformed_surface.h"
 #include "models/sim/parameters.h"
@@ -76,9 +77,7 @@ std::vector<std::string> write_fit_renders(const OutputDir& out, const Problem& 
                        cam.height * scale + 16, f, frame.step, frame.step * problem.scene.time.dt, cam.name, shown,
                        cam.height * scale + 32, problem.phi_max);
     const std::string name = fmt::format("fit_frame_{:04d}.svg", f);
-    std::ofstream file(out.file(name));
-    file << svg;
-    if (!file) throw InputError(fmt::format("cannot write {}", out.file(name)));
+    write_text_file(out.file(name), svg);
     written.push_back(name);
   }
   return written;
