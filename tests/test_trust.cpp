@@ -13,7 +13,10 @@
 #include "models/io/output_dir.h"
 #include "models/io/run_record.h"
 #include "models/sim/body.h"
+#include "models/sim/deformed_surface.h"
 #include "models/sim/match_check.h"
+#include "models/sim/observation_setup.h"
+#include "models/observation/depth_render.h"
 #include "models/sim/parameters.h"
 #include "models/sim/problem.h"
 #include "models/sim/scene.h"
@@ -329,6 +332,52 @@ TEST(MatchCheck, FewMatchesAreAnErrorAndUnsegmentedDepthAWarning) {
   expect_input_error([&] { check_matches(frames, "obs", "the best fit"); }, {"obs", "0 of 3000", "camera_to_world"});
   for (FrameCost& f : frames) f.points = 0;
   expect_input_error([&] { check_matches(frames, "obs", "x"); }, {"no depth measurement"});
+  clear_warnings();
+}
+
+// The case: depth images with the floor left in (not segmented). Rendered here with a
+// floor quad under the torus; the cost at the true parameters must not pass silently.
+TEST(MatchCheck, DepthWithTheFloorLeftInIsNotSilent) {
+  Sandbox box;
+  Scene scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/torus.json", {"time.steps=6"});
+  const ObservationSpec spec = parse_observation_spec(scene);
+  const SimGrid grid = build_body_grid(scene);
+  Simulation sim(scene, grid);
+  const DeformedSurface surface(grid);
+  ObservationSet set;
+  set.dt = scene.time.dt;
+  set.depth_scale = spec.depth_scale;
+  set.cameras = spec.cameras;
+  for (int f = 0; f <= scene.time.steps; ++f) {
+    if (f > 0) sim.step();
+    std::vector<Eigen::Vector3d> v = surface.positions(sim.displacement(0));
+    std::vector<std::array<int, 3>> t = surface.triangles();
+    const int base = int(v.size());
+    for (double x : {-6.0, 6.0})
+      for (double z : {-6.0, 6.0}) v.emplace_back(x, 0.0, z);
+    t.push_back({base, base + 1, base + 3});
+    t.push_back({base, base + 3, base + 2});
+    const TriangleBvh bvh(v, t);
+    std::vector<DepthImage> images;
+    for (const DepthCamera& cam : set.cameras) images.push_back(render_depth(cam, bvh, 0.0, 1));
+    set.frames.push_back(images);
+  }
+  set.frame_count = int(set.frames.size());
+  write_observations(box / "obs", set);
+  const Problem problem = load_problem(scene.file, {"time.steps=6"}, box / "obs");
+  Simulation fit(problem.scene, problem.grid, 1, true);
+  const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
+  const CostGradient r = evaluate_cost_gradient(fit, cost, problem.frames)[0];
+  clear_warnings();
+  bool refused = false;
+  try {
+    check_matches(r.frames, box / "obs", "the true parameters");
+  } catch (const InputError& e) {
+    refused = std::string(e.what()).find("not segmented") != std::string::npos;
+  }
+  bool warned = false;
+  for (const Warning& w : warnings()) warned |= w.code == "unsegmented_depth";
+  EXPECT_TRUE(refused || warned) << "the floor in the depth passed without a word";
   clear_warnings();
 }
 
