@@ -3,6 +3,8 @@
 
 #include <fmt/format.h>
 
+#include <omp.h>
+
 #include <cmath>
 
 #include "models/io/errors.h"
@@ -148,6 +150,16 @@ void Simulation::check_state(int b, const char* when) {
   audits_[b].check(*this, b, steps_, when);
 }
 
+// Items in parallel when there are enough of them to fill the threads; else one after the
+// other, each with its parallel loop over the cells.
+void Simulation::check_states(const char* when) {
+  if (batch() >= omp_get_max_threads()) {
+    for_each_batch_item(batch(), [&](int b) { check_state(b, when); });
+  } else {
+    for (int b = 0; b < batch(); ++b) check_state(b, when);
+  }
+}
+
 void Simulation::step(bool to_host) { advance(to_host, -1); }
 
 void Simulation::step_and_keep(int key) { advance(false, key); }
@@ -185,7 +197,7 @@ void Simulation::advance(bool to_host, int keep_key) {
     std::copy_n(st.data(graph_.v, b), 3 * grid_.node_count, st.data(graph_.v_prev, b));
     if (graph_.band_u >= 0) std::copy_n(st.data(graph_.band_u, b), 3 * grid_.band_count, st.data(graph_.band_guess, b));
   }
-  for_each_batch_item(batch(), [&](int b) { check_state(b); });
+  check_states("step");
 }
 
 void Simulation::sync_host() {
@@ -193,7 +205,7 @@ void Simulation::sync_host() {
   TensorStore<double>& st = interpreter_->store();
   for (int t : state_tensors()) gpu_->download(st, t);
   host_stale_ = false;
-  for_each_batch_item(batch(), [&](int b) { check_state(b, "by step"); });  // the steps since the last sync ran unchecked
+  check_states("by step");  // the steps since the last sync ran unchecked
 }
 
 std::vector<int> Simulation::state_tensors() const {

@@ -114,7 +114,8 @@ class Simulation {
 
  private:
   void write_inputs(int b);
-  void check_state(int b, const char* when = "step");  // when: how the error names the step
+  void check_state(int b, const char* when = "step");
+  void check_states(const char* when);  // every batch item  // when: how the error names the step
   void require_host_state() const;
   void advance(bool to_host, int keep_key);
   std::vector<int> state_tensors() const;  // u_prev, v_prev and, with extension, band_guess
