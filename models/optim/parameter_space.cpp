@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "models/io/errors.h"
+#include "models/sim/parameter_table.h"
 
 namespace ssc {
 
@@ -15,25 +16,22 @@ namespace ssc {
 constexpr double kMaxLog = 700;
 
 ParameterAxis default_axis(const std::string& name, double nominal) {
+  const ParameterRow row = parameter_row(name);
   ParameterAxis a;
   a.name = name;
-  if (name == "youngs_modulus" || name == "density" || name == "mass_damping" || name == "stiffness_damping") {
-    a.kind = ParameterAxis::Kind::Positive;
-  } else if (name == "poisson_ratio") {
-    a.kind = ParameterAxis::Kind::Bounded;
-    a.lower = 0.01;
-    a.upper = 0.49;
-  } else if (name.find("polar_deg") != std::string::npos) {
-    a.kind = ParameterAxis::Kind::Bounded;
-    a.lower = 0;
-    a.upper = 90;
-  } else if (name.find("azimuth_deg") != std::string::npos) {
-    a.kind = ParameterAxis::Kind::Bounded;
-    a.lower = -180;
-    a.upper = 180;
-  } else {
-    a.kind = ParameterAxis::Kind::Free;
-    a.scale = std::max(std::abs(nominal), 1.0);
+  switch (row.transform) {
+    case ParameterRow::Transform::Positive:
+      a.kind = ParameterAxis::Kind::Positive;
+      break;
+    case ParameterRow::Transform::Bounded:
+      a.kind = ParameterAxis::Kind::Bounded;
+      a.lower = row.optimiser_lower;
+      a.upper = row.optimiser_upper;
+      break;
+    case ParameterRow::Transform::Free:
+      a.kind = ParameterAxis::Kind::Free;
+      a.scale = std::max(std::abs(nominal), 1.0);
+      break;
   }
   return a;
 }

@@ -3,7 +3,10 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
+
 #include "models/io/json_reader.h"
+#include "models/sim/parameter_table.h"
 
 namespace ssc {
 
@@ -34,17 +37,8 @@ UnitScales unit_scales(const Scene& scene, const SimGrid& grid) {
 }
 
 double to_si(const std::string& name, double v, const UnitScales& u) {
-  const double L = u.length, M = u.mass, T = u.time;
-  if (name == "youngs_modulus") return v * M / (L * T * T);
-  if (name == "density") return v * M / (L * L * L);
-  if (name == "mass_damping") return v / T;
-  if (name == "stiffness_damping") return v * T;
-  if (name == "poisson_ratio" || name.find("_deg") != std::string::npos) return v;
-  if (name.rfind("gravity", 0) == 0) return v * L / (T * T);
-  if (name.rfind("initial.linear_velocity", 0) == 0) return v * L / T;
-  if (name.rfind("initial.angular_velocity", 0) == 0) return v / T;
-  if (name.find("height") != std::string::npos) return v * L;
-  throw std::logic_error(fmt::format("no unit conversion for parameter '{}'", name));
+  const ParameterRow row = parameter_row(name);
+  return v * std::pow(u.mass, row.mass) * std::pow(u.length, row.length) * std::pow(u.time, row.time);
 }
 
 }  // namespace ssc

@@ -1,0 +1,170 @@
+// The parameter table (see parameter_table.h).
+#include "models/sim/parameter_table.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "models/io/errors.h"
+#include "models/sim/scene.h"
+
+namespace ssc {
+namespace {
+
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+const char* const kAxes[3] = {"x", "y", "z"};
+
+std::string plane_prefix(size_t k) { return k == 0 ? "ground." : fmt::format("ground.planes[{}].", k); }
+
+void plane_angles(const PlaneSpec& plane, double* polar, double* azimuth) {
+  const Eigen::Vector3d u = plane.normal.normalized();
+  *polar = std::acos(std::clamp(u.y(), -1.0, 1.0)) / kDegree;
+  *azimuth = std::hypot(u.x(), u.z()) < 1e-12 ? plane.azimuth_deg : std::atan2(u.z(), u.x()) / kDegree;
+}
+
+void set_plane_angles(PlaneSpec& plane, double polar, double azimuth) {
+  plane.normal = normal_from_angles(polar, azimuth);
+  plane.azimuth_deg = azimuth;
+}
+
+ParameterRow material_row(const std::string& name, const std::string& unit, int mass, int length, int time,
+                          double PhysicalParameters::*field, double ParameterGradient::*grad) {
+  ParameterRow r;
+  r.name = name;
+  r.unit = unit;
+  r.mass = mass, r.length = length, r.time = time;
+  r.transform = ParameterRow::Transform::Positive;
+  r.lower = 0;
+  r.scene_key = "material." + name;
+  r.graph_input = name;
+  r.get = [field](const PhysicalParameters& p) { return p.*field; };
+  r.set = [field](PhysicalParameters& p, double v) { p.*field = v; };
+  r.gradient = [grad](const ParameterGradient& g, const PhysicalParameters&) { return g.*grad; };
+  return r;
+}
+
+void add_vector_rows(std::vector<ParameterRow>& rows, const std::string& base, const std::string& unit, int length,
+                     int time, Eigen::Vector3d PhysicalParameters::*field, Eigen::Vector3d ParameterGradient::*grad,
+                     const std::string& graph_input) {
+  for (int a = 0; a < 3; ++a) {
+    ParameterRow r;
+    r.name = base + "." + kAxes[a];
+    r.unit = unit;
+    r.length = length, r.time = time;
+    r.scene_key = fmt::format("{}[{}]", base, a);
+    r.graph_input = graph_input;
+    r.get = [field, a](const PhysicalParameters& p) { return (p.*field)[a]; };
+    r.set = [field, a](PhysicalParameters& p, double v) { (p.*field)[a] = v; };
+    r.gradient = [grad, a](const ParameterGradient& g, const PhysicalParameters&) { return (g.*grad)[a]; };
+    rows.push_back(r);
+  }
+}
+
+// d cost / d angle from the gradient with respect to the unit normal (chain rule).
+double angle_gradient(const ParameterGradient& g, const PhysicalParameters& p, size_t k, bool polar_angle) {
+  double polar, azimuth;
+  plane_angles(p.planes[k], &polar, &azimuth);
+  const double sp = std::sin(polar * kDegree), cp = std::cos(polar * kDegree);
+  const double sa = std::sin(azimuth * kDegree), ca = std::cos(azimuth * kDegree);
+  const Eigen::Vector3d dn = polar_angle ? Eigen::Vector3d(cp * ca, -sp, cp * sa) : Eigen::Vector3d(-sp * sa, 0, sp * ca);
+  return kDegree * g.plane_normal[k].dot(dn);
+}
+
+void add_plane_rows(std::vector<ParameterRow>& rows, size_t k) {
+  const std::string prefix = plane_prefix(k);
+  const std::string key = fmt::format("ground.planes[{}].", k);
+  ParameterRow height;
+  height.name = prefix + "height";
+  height.unit = "m";
+  height.length = 1;
+  height.scene_key = key + "height";
+  height.graph_input = "ground_planes";
+  height.get = [k](const PhysicalParameters& p) { return p.planes[k].height; };
+  height.set = [k](PhysicalParameters& p, double v) { p.planes[k].height = v; };
+  height.gradient = [k](const ParameterGradient& g, const PhysicalParameters&) { return g.plane_height[k]; };
+  rows.push_back(height);
+  for (const bool is_polar : {true, false}) {
+    ParameterRow r;
+    r.name = prefix + (is_polar ? "polar_deg" : "azimuth_deg");
+    r.unit = "deg";
+    r.transform = ParameterRow::Transform::Bounded;
+    r.optimiser_lower = is_polar ? 0 : -180;
+    r.optimiser_upper = is_polar ? 90 : 180;
+    if (is_polar) r.lower = 0, r.upper = 180, r.lower_inclusive = r.upper_inclusive = true;
+    r.scene_key = key + "angles_deg";
+    r.graph_input = "ground_planes";
+    r.get = [k, is_polar](const PhysicalParameters& p) {
+      double polar, azimuth;
+      plane_angles(p.planes[k], &polar, &azimuth);
+      return is_polar ? polar : azimuth;
+    };
+    r.set = [k, is_polar](PhysicalParameters& p, double v) {
+      double polar, azimuth;
+      plane_angles(p.planes[k], &polar, &azimuth);
+      (is_polar ? polar : azimuth) = v;
+      set_plane_angles(p.planes[k], polar, azimuth);
+    };
+    r.gradient = [k, is_polar](const ParameterGradient& g, const PhysicalParameters& p) {
+      return angle_gradient(g, p, k, is_polar);
+    };
+    rows.push_back(r);
+  }
+}
+
+}  // namespace
+
+std::string ParameterRow::value_error(double value) const {
+  if (!std::isfinite(value)) return fmt::format("must be a finite number, found {}", value);
+  const bool above = lower_inclusive ? value >= lower : value > lower;
+  const bool below = upper_inclusive ? value <= upper : value < upper;
+  if (above && below) return "";
+  if (upper == kInf) return fmt::format("must be {}, found {:g}", lower == 0 ? (lower_inclusive ? "non-negative" : "positive")
+                                                                              : fmt::format("above {:g}", lower), value);
+  return fmt::format("must be in {}{:g}, {:g}{}, found {:g}", lower_inclusive ? "[" : "(", lower, upper,
+                     upper_inclusive ? "]" : ")", value);
+}
+
+std::vector<ParameterRow> parameter_table(const PhysicalParameters& p) {
+  using PP = PhysicalParameters;
+  using PG = ParameterGradient;
+  std::vector<ParameterRow> rows = {
+      material_row("youngs_modulus", "Pa", 1, -1, -2, &PP::youngs_modulus, &PG::youngs_modulus),
+      material_row("poisson_ratio", "1", 0, 0, 0, &PP::poisson_ratio, &PG::poisson_ratio),
+      material_row("density", "kg/m^3", 1, -3, 0, &PP::density, &PG::density),
+      material_row("mass_damping", "1/s", 0, 0, -1, &PP::mass_damping, &PG::mass_damping),
+      material_row("stiffness_damping", "s", 0, 0, 1, &PP::stiffness_damping, &PG::stiffness_damping),
+  };
+  ParameterRow& nu = rows[1];
+  nu.transform = ParameterRow::Transform::Bounded;
+  nu.optimiser_lower = 0.01, nu.optimiser_upper = 0.49;
+  nu.upper = 0.5;
+  for (ParameterRow* damping : {&rows[3], &rows[4]}) damping->lower_inclusive = true;
+  add_vector_rows(rows, "gravity", "m/s^2", 1, -2, &PP::gravity, &PG::gravity, "gravity");
+  add_vector_rows(rows, "initial.linear_velocity", "m/s", 1, -1, &PP::linear_velocity, &PG::linear_velocity, "v_prev");
+  add_vector_rows(rows, "initial.angular_velocity", "rad/s", 0, -1, &PP::angular_velocity, &PG::angular_velocity, "v_prev");
+  for (size_t k = 0; k < p.planes.size(); ++k) add_plane_rows(rows, k);
+  return rows;
+}
+
+const ParameterRow* find_parameter_row(const std::vector<ParameterRow>& table, const std::string& name) {
+  for (const ParameterRow& r : table)
+    if (r.name == name) return &r;
+  return nullptr;
+}
+
+ParameterRow parameter_row(const std::string& name) {
+  PhysicalParameters shape;
+  shape.planes.resize(1);
+  const size_t open = name.find("ground.planes[");
+  if (open == 0) {
+    const int k = std::atoi(name.c_str() + 14);
+    if (k >= 0 && k < 64) shape.planes.resize(size_t(k) + 1);
+  }
+  const std::vector<ParameterRow> table = parameter_table(shape);
+  if (const ParameterRow* r = find_parameter_row(table, name)) return *r;
+  throw InputError(fmt::format("unknown parameter '{}'", name));
+}
+
+}  // namespace ssc

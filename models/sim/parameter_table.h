@@ -1,0 +1,48 @@
+// The one table of physical parameters: per parameter its name (the vocabulary of --set,
+// --fit, --param and result.json), SI unit and dimension, the optimiser's transform, the
+// range of valid values, the scene key it is read from, the graph input it feeds, and how it
+// is read from and written into PhysicalParameters and read from the adjoint's gradient.
+// Everything that names a parameter (models/sim/parameters.h, models/sim/units.h,
+// models/optim/parameter_space.h) looks it up here; a new parameter is one row.
+#pragma once
+#include <functional>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "models/sim/gradient.h"
+#include "models/sim/simulation.h"
+
+namespace ssc {
+
+struct ParameterRow {
+  std::string name;       // "youngs_modulus", "gravity.y", "ground.planes[1].height"
+  std::string unit;       // SI: "Pa", "m/s^2", "deg", ...
+  int mass = 0, length = 0, time = 0;  // the unit is kg^mass m^length s^time (for scene units)
+  // How an optimiser moves it (models/optim/parameter_space.h): exp(z), a sigmoid onto
+  // [optimiser_lower, optimiser_upper], or a scaled free coordinate.
+  enum class Transform { Positive, Bounded, Free } transform = Transform::Free;
+  double optimiser_lower = 0, optimiser_upper = 0;
+  // Valid values: lower < x < upper (or <= where inclusive).
+  double lower = -std::numeric_limits<double>::infinity(), upper = std::numeric_limits<double>::infinity();
+  bool lower_inclusive = false, upper_inclusive = false;
+  std::string scene_key;    // where the scene sets it, e.g. "material.youngs_modulus", "gravity[1]"
+  std::string graph_input;  // the timestep graph's input tensor it feeds (models/sim/timestep_graph.h)
+  std::function<double(const PhysicalParameters&)> get;
+  std::function<void(PhysicalParameters&, double)> set;
+  std::function<double(const ParameterGradient&, const PhysicalParameters&)> gradient;
+
+  // Empty if the value is valid, else why not ("must be positive, found 0").
+  std::string value_error(double value) const;
+};
+
+// Every parameter of a scene with these parameters (the plane rows depend on the number of
+// ground planes), in the order `ssc gradient` lists them.
+std::vector<ParameterRow> parameter_table(const PhysicalParameters& p);
+// The row of a name; nullptr if there is none.
+const ParameterRow* find_parameter_row(const std::vector<ParameterRow>& table, const std::string& name);
+// The row of a name for any scene shape (plane index beyond the scene's planes allowed);
+// InputError for an unknown name.
+ParameterRow parameter_row(const std::string& name);
+
+}  // namespace ssc
