@@ -1,7 +1,7 @@
 // The tape graph: a static list of ops over typed tensors, built once per scene and
 // replayed every timestep (and, later, differentiated and compiled into kernels).
 //
-// Every tensor has a domain (what it is indexed by: cells, active nodes, collision
+// Every tensor has a domain (what it is indexed by: cells, active nodes, contact
 // points, band nodes, or one value per simulation = Scalar) and a component count, and
 // is stored with a leading batch dimension: element (b, i, k) of a tensor lives at
 // (b * count(domain) + i) * components + k. Tensors are functional: each is written by

@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "graph/graph.h"
-#include "models/grid/sim_grid.h"
-#include "ops/collision.h"
+#include "runtime/static_arrays.h"
+#include "ops/contact.h"
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/newmark.h"
@@ -54,11 +54,11 @@ inline int load_ground_planes(const TensorStore<Real>& store, const OpNode& op, 
   return count;
 }
 
-// Position and velocity of collision point p: (1 - t, t) between its edge's two nodes.
+// Position and velocity of contact point p: (1 - t, t) between its edge's two nodes.
 template <class Real>
-inline void contact_point_state(const SimGrid& g, const Real* node_rest, const Real* point_t, const Real* u, const Real* v,
+inline void contact_point_state(const StaticArrays& g, const Real* node_rest, const Real* point_t, const Real* u, const Real* v,
                                 int p, Vec3<Real>& x, Vec3<Real>& vel) {
-  const CollisionPoint& cp = g.collision_points[p];
+  const ContactPoint& cp = g.contact_points[p];
   const Real t = point_t[p];
   x = (Real(1) - t) * (load3(node_rest, cp.node_a) + load3(u, cp.node_a)) + t * (load3(node_rest, cp.node_b) + load3(u, cp.node_b));
   vel = (Real(1) - t) * load3(v, cp.node_a) + t * load3(v, cp.node_b);
@@ -66,7 +66,7 @@ inline void contact_point_state(const SimGrid& g, const Real* node_rest, const R
 
 // Per-corner K p for every cell (the matrix-free stiffness product).
 template <class Real>
-inline void stiffness_apply_cells(const SimGrid& g, const Real* rotation, const Real* weights, Real lambda, Real mu,
+inline void stiffness_apply_cells(const StaticArrays& g, const Real* rotation, const Real* weights, Real lambda, Real mu,
                                   const Real* p, Real* corner_out) {
   const Real h = Real(g.h);
 #pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
@@ -80,7 +80,7 @@ inline void stiffness_apply_cells(const SimGrid& g, const Real* rotation, const 
 
 // Node sums of per-corner vectors: out[i] (+)= sum over the corners touching node i.
 template <class Real>
-inline void gather_corners_to_nodes(const SimGrid& g, const Real* corner, Real* out, bool accumulate) {
+inline void gather_corners_to_nodes(const StaticArrays& g, const Real* corner, Real* out, bool accumulate) {
 #pragma omp parallel for schedule(static) if (g.node_count >= kParallelThreshold)
   for (int i = 0; i < g.node_count; ++i) {
     const Vec3<Real> s = ops::gather_corner_sum(corner, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
@@ -94,7 +94,7 @@ inline void gather_corners_to_nodes(const SimGrid& g, const Real* corner, Real* 
 // The SPD time-step system with fixed nodes eliminated (identity rows and columns).
 template <class Real>
 struct NewmarkSystem {
-  const SimGrid& g;
+  const StaticArrays& g;
   const std::vector<Real>& weights;
   const Real* rotation;
   Real lambda, mu;
@@ -140,7 +140,7 @@ struct NewmarkSystem {
 
 // Solves the band Laplacian L x = rhs (3 components; x starts from its content).
 template <class Real>
-inline PcgResult solve_band_laplacian(const SimGrid& g, const Real* rhs, Real* x, double tolerance, int max_iterations) {
+inline PcgResult solve_band_laplacian(const StaticArrays& g, const Real* rhs, Real* x, double tolerance, int max_iterations) {
   const long n = 3L * g.band_count;
   std::vector<Real> inv_diag(n);
   for (int i = 0; i < g.band_count; ++i)

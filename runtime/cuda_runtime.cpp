@@ -13,7 +13,7 @@
 #include <cstring>
 
 #include "codegen/cuda_source.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "runtime/cuda_timestep_impl.h"
 
 namespace ssc {
@@ -137,7 +137,7 @@ void GpuTimestep::Impl::upload_int(const std::string& name, const std::vector<in
 }
 
 void GpuTimestep::Impl::upload_grid() {
-  const SimGrid& g = grid;
+  const StaticArrays& g = grid;
   upload_int("cell_nodes", g.cell_nodes);
   upload_real("cell_weights", g.cell_volume_weights);
   upload_real("node_volume", g.node_volume);
@@ -146,7 +146,7 @@ void GpuTimestep::Impl::upload_grid() {
   upload_int("node_cell_entry", g.node_cell_entry);
   std::vector<int> pn;
   std::vector<double> pt, pa;
-  for (const CollisionPoint& p : g.collision_points) {
+  for (const ContactPoint& p : g.contact_points) {
     pn.push_back(p.node_a);
     pn.push_back(p.node_b);
     pt.push_back(p.t);
@@ -610,7 +610,7 @@ void GpuTimestep::Impl::write_iterations(int tensor, const std::vector<int>& ite
 
 // ---- GpuTimestep ----
 
-GpuTimestep::GpuTimestep(const Graph& graph, const SimGrid& grid, int batch, const SolverOptions& solver,
+GpuTimestep::GpuTimestep(const Graph& graph, const StaticArrays& grid, int batch, const SolverOptions& solver,
                          const GpuOptions& options)
     : impl_(std::make_unique<Impl>(graph, grid, batch, solver, options)) {
   impl_->setup();

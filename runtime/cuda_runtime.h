@@ -28,7 +28,7 @@
 #include <vector>
 
 #include "graph/graph.h"
-#include "models/grid/sim_grid.h"
+#include "runtime/static_arrays.h"
 #include "runtime/interpreter.h"
 #include "runtime/nvrtc_compiler.h"
 #include "runtime/tensor_store.h"
@@ -74,7 +74,7 @@ struct GpuKernelTiming {
 class GpuTimestep {
  public:
   // Throws GpuUnavailable when there is no usable GPU, NvrtcError when a kernel fails.
-  GpuTimestep(const Graph& graph, const SimGrid& grid, int batch, const SolverOptions& solver,
+  GpuTimestep(const Graph& graph, const StaticArrays& grid, int batch, const SolverOptions& solver,
               const GpuOptions& options = {});
   ~GpuTimestep();
   GpuTimestep(const GpuTimestep&) = delete;

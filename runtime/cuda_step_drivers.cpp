@@ -16,7 +16,7 @@
 #include <cstdlib>
 #include <functional>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "runtime/cuda_timestep_impl.h"
 
 namespace ssc {

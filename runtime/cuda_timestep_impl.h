@@ -58,7 +58,7 @@ struct GpuTimestep::Impl {
   using Apply = std::function<void(cu::DevicePtr, cu::DevicePtr, int)>;
 
   const Graph& graph;
-  const SimGrid& grid;
+  const StaticArrays& grid;
   int batch;
   SolverOptions solver;
   GpuOptions options;
@@ -112,7 +112,7 @@ struct GpuTimestep::Impl {
   std::string extension_grid;                 // the extension's grid kernel (GpuOptions::extension_phases)
   std::vector<SolveCheck> solve_checks;       // this step's grid solves, read after it
 
-  Impl(const Graph& g, const SimGrid& gr, int b, const SolverOptions& s, const GpuOptions& o)
+  Impl(const Graph& g, const StaticArrays& gr, int b, const SolverOptions& s, const GpuOptions& o)
       : graph(g), grid(gr), batch(b), solver(s), options(o) {}
   ~Impl();
 

@@ -4,10 +4,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
-#include "models/io/errors.h"
-#include "ops/collision.h"
+#include "runtime/errors.h"
+#include "ops/contact.h"
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/newmark.h"
@@ -18,11 +19,11 @@
 
 namespace ssc {
 
-DomainSizes domain_sizes(const SimGrid& grid) {
+DomainSizes domain_sizes(const StaticArrays& grid) {
   DomainSizes s;
   s.cell = grid.cell_count;
   s.node = grid.node_count;
-  s.point = int(grid.collision_points.size());
+  s.point = int(grid.contact_points.size());
   s.band = grid.band_count;
   return s;
 }
@@ -33,14 +34,14 @@ static std::vector<Real> real_copy(const std::vector<double>& v) {
 }
 
 template <class Real>
-Interpreter<Real>::Interpreter(const Graph& graph, const SimGrid& grid, int batch, const SolverOptions& options)
+Interpreter<Real>::Interpreter(const Graph& graph, const StaticArrays& grid, int batch, const SolverOptions& options)
     : graph_(graph),
       grid_(grid),
       options_(options),
       store_(graph, domain_sizes(grid), batch),
       adjoint_(graph, domain_sizes(grid), batch) {
   graph_.validate();
-  for (const CollisionPoint& p : grid.collision_points) point_t_.push_back(Real(p.t));
+  for (const ContactPoint& p : grid.contact_points) point_t_.push_back(Real(p.t));
   weights_ = real_copy<Real>(grid.cell_volume_weights);
   node_rest_ = real_copy<Real>(grid.node_rest);
   extension_adjoint_guess_.assign(batch, {});
@@ -76,7 +77,7 @@ void Interpreter<Real>::execute(const OpNode& op) {
 
 template <class Real>
 void Interpreter<Real>::execute_item(const OpNode& op, int b) {
-  const SimGrid& g = grid_;
+  const StaticArrays& g = grid_;
   const Real h = Real(g.h);
   const std::vector<Real>& weights = weights_;
 
@@ -133,12 +134,12 @@ void Interpreter<Real>::execute_item(const OpNode& op, int b) {
       const int plane_count = load_ground_planes(store_, op, b, planes);
       const Real dt = a.scalar("dt"), theta = a.scalar("theta");
       Real* f = a.out("point_force");
-      const int n = int(g.collision_points.size());
+      const int n = int(g.contact_points.size());
 #pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
       for (int p = 0; p < n; ++p) {
         Vec3<Real> x, vel;
         contact_point_state(g, node_rest_.data(), point_t_.data(), u, v, p, x, vel);
-        store3(f, p, ops::contact_force(x, vel, Real(g.collision_points[p].area), planes, plane_count, dt, theta));
+        store3(f, p, ops::contact_force(x, vel, Real(g.contact_points[p].area), planes, plane_count, dt, theta));
       }
       break;
     }

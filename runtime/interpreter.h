@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "graph/graph.h"
-#include "models/grid/sim_grid.h"
+#include "runtime/static_arrays.h"
 #include "runtime/tensor_store.h"
 
 namespace ssc {
@@ -26,17 +26,17 @@ struct RunReport {
   std::vector<int> degenerate_cells;  // cells whose rotation fell back to identity
 };
 
-DomainSizes domain_sizes(const SimGrid& grid);
+DomainSizes domain_sizes(const StaticArrays& grid);
 
 template <class Real>
 class Interpreter {
  public:
-  Interpreter(const Graph& graph, const SimGrid& grid, int batch, const SolverOptions& options);
+  Interpreter(const Graph& graph, const StaticArrays& grid, int batch, const SolverOptions& options);
 
   TensorStore<Real>& store() { return store_; }
   const TensorStore<Real>& store() const { return store_; }
   const Graph& graph() const { return graph_; }
-  const SimGrid& grid() const { return grid_; }
+  const StaticArrays& grid() const { return grid_; }
   int batch() const { return store_.batch(); }
   const SolverOptions& options() const { return options_; }
 
@@ -64,12 +64,12 @@ class Interpreter {
   void execute_adjoint_item(const OpNode& op, int b);
 
   const Graph& graph_;
-  const SimGrid& grid_;
+  const StaticArrays& grid_;
   SolverOptions options_;
   TensorStore<Real> store_;
   TensorStore<Real> adjoint_;
   RunReport report_;
-  std::vector<Real> point_t_;  // collision point edge parameters, in Real
+  std::vector<Real> point_t_;  // contact point edge parameters, in Real
   std::vector<Real> weights_;    // cut-cell volume weights, in Real
   std::vector<Real> node_rest_;  // rest positions of the active nodes, in Real
   std::vector<std::vector<Real>> extension_adjoint_guess_;  // per batch item, warm start

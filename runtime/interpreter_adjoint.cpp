@@ -4,8 +4,8 @@
 // node gathers, scalar parameter gradients through fixed-order sums: deterministic.
 #include <fmt/format.h>
 
-#include "models/io/errors.h"
-#include "ops/collision.h"
+#include "runtime/errors.h"
+#include "ops/contact.h"
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/newmark.h"
@@ -53,7 +53,7 @@ void Interpreter<Real>::execute_adjoint(const OpNode& op) {
 
 template <class Real>
 void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
-  const SimGrid& g = grid_;
+  const StaticArrays& g = grid_;
   const Real h = Real(g.h);
   const std::vector<Real>& weights = weights_;
   const size_t corner_size = 24 * size_t(g.cell_count);
@@ -121,7 +121,7 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       const int plane_count = load_ground_planes(store_, op, b, planes);
       const Real dt = a.scalar("dt"), theta = a.scalar("theta");
       const Real* f_bar = d.out("point_force");
-      const int n = int(g.collision_points.size());
+      const int n = int(g.contact_points.size());
       std::vector<Real> x_bar(3 * size_t(n)), v_bar(3 * size_t(n)), plane_bar(4 * size_t(n) * plane_count);
 #pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
       for (int p = 0; p < n; ++p) {
@@ -134,7 +134,7 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
           nb[k] = zero3<Real>();
           hb[k] = Real(0);
         }
-        ops::adj_contact_force(x, vel, Real(g.collision_points[p].area), planes, plane_count, dt, theta, load3(f_bar, p), xb_, vb_, nb, hb);
+        ops::adj_contact_force(x, vel, Real(g.contact_points[p].area), planes, plane_count, dt, theta, load3(f_bar, p), xb_, vb_, nb, hb);
         store3(x_bar.data(), p, xb_);
         store3(v_bar.data(), p, vb_);
         for (int k = 0; k < plane_count; ++k) {
@@ -168,8 +168,8 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
         for (int c = 0; c < 8; ++c) add3(corner_bar, 8 * e + c, load3(f_bar, g.cell_nodes[8 * e + c]));
       if (a.has_input("point_force")) {
         Real* point_bar = const_cast<Real*>(d.in("point_force"));
-        for (int p = 0; p < int(g.collision_points.size()); ++p) {
-          const CollisionPoint& cp = g.collision_points[p];
+        for (int p = 0; p < int(g.contact_points.size()); ++p) {
+          const ContactPoint& cp = g.contact_points[p];
           const Real t = point_t_[p];
           add3(point_bar, p, (Real(1) - t) * load3(f_bar, cp.node_a) + t * load3(f_bar, cp.node_b));
         }

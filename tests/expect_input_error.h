@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 

@@ -7,7 +7,7 @@
 #include "models/geometry/sdf_grid.h"
 #include "models/grid/cut_cell.h"
 #include "models/grid/marching_tets.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/ply_writer.h"
 
 #include <gtest/gtest.h>

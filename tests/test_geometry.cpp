@@ -24,7 +24,7 @@
 #include "models/geometry/primitives.h"
 #include "models/geometry/sdf_file.h"
 #include "models/geometry/transform.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 namespace {

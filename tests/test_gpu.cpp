@@ -20,7 +20,7 @@
 #include <random>
 
 #include "models/grid/sim_grid.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/sim/body.h"
 #include "models/sim/gradient.h"
 #include "models/sim/simulation.h"

@@ -233,7 +233,7 @@ TEST(GradientPipeline, SceneHasCollisionsRotationAndObservations) {
   const Vec3 n = pl.params.planes[0].normal.normalized();
   for (int t = 1; t <= kSteps; ++t) {
     sim.step();
-    for (const CollisionPoint& cp : pl.grid.collision_points) {
+    for (const ContactPoint& cp : pl.grid.contact_points) {
       Vec3 x = Vec3::Zero();
       for (int s = 0; s < 2; ++s) {
         const int a = s ? cp.node_b : cp.node_a;
@@ -253,9 +253,9 @@ TEST(GradientPipeline, SceneHasCollisionsRotationAndObservations) {
   double nu = 0, nb = 0;
   for (double x : u_bar) nu += x * x;
   for (double x : band_bar) nb += x * x;
-  std::printf("pipeline scene: %d cells, %d nodes, %d band nodes, %zu collision points, %zu observed points in %zu "
+  std::printf("pipeline scene: %d cells, %d nodes, %d band nodes, %zu contact points, %zu observed points in %zu "
               "frames (%zu matched), deepest penetration %.4f m, cost %.6e, last frame |u_bar| %.3e |band_bar| %.3e\n",
-              pl.grid.cell_count, pl.grid.node_count, pl.grid.band_count, pl.grid.collision_points.size(), pl.points,
+              pl.grid.cell_count, pl.grid.node_count, pl.grid.band_count, pl.grid.contact_points.size(), pl.points,
               pl.frames.size(), matched, -min_dist, r.cost, std::sqrt(nu), std::sqrt(nb));
   EXPECT_GT(std::sqrt(nb), 0.01 * std::sqrt(nu)) << "the observations must reach cells with band corners";
   EXPECT_LT(min_dist, -0.005) << "the sphere must press into the ground";

@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "tests/expect_input_error.h"
 #include "models/observation/camera.h"
 #include "models/observation/depth_png.h"

@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-#include "ops/collision.h"
+#include "ops/contact.h"
 #include "ops/elasticity.h"
 #include "ops/newmark.h"
 #include "ops/polar.h"

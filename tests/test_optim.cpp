@@ -31,7 +31,7 @@
 #include <string>
 #include <vector>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "tests/expect_input_error.h"
 #include "models/optim/optimizer.h"
 #include "models/optim/parameter_space.h"

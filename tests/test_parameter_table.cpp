@@ -4,7 +4,7 @@
 #include <cmath>
 #include <set>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/sim/parameter_table.h"
 #include "models/sim/parameters.h"
 

@@ -28,7 +28,7 @@
 #include <string>
 #include <vector>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/sim/body.h"
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
@@ -491,7 +491,7 @@ double softplus_tail(double z) {
   return dilog01(x) - 0.5 * dilog01(x * x);  // -Li2(-x) = Li2(x) - Li2(x^2)/2
 }
 
-// Potential of the soft-min penalty of ops/collision.h at one test point:
+// Potential of the soft-min penalty of ops/contact.h at one test point:
 // Phi(d) = k A F(alpha d) / alpha^2, so -dPhi/dd = -k A softmin(d), the force along n.
 double penalty_potential(double dist, double k, double area, double alpha) {
   return k * area / (alpha * alpha) * softplus_tail(alpha * dist);
@@ -517,7 +517,7 @@ ContactState contact_state(const Simulation& sim, const PlaneSpec& plane) {
   const SimGrid& g = sim.grid();
   const double* u = sim.displacement(0);
   ContactState s;
-  for (const CollisionPoint& p : g.collision_points) {
+  for (const ContactPoint& p : g.contact_points) {
     const Vec3 x = (1 - p.t) * node_position(g, u, p.node_a) + p.t * node_position(g, u, p.node_b);
     const double d = plane.normal.dot(x) - plane.height;
     s.min_distance = std::min(s.min_distance, d);

@@ -193,7 +193,7 @@ TEST(EnergyAudit, FreeFallConservesTheAuditedEnergy) {
 }
 
 TEST(EnergyAudit, ContactPotentialIsTheForcePotential) {
-  // -dU/dd must be the soft-min penalty force -k A softmin(d) (ops/collision.h) at every
+  // -dU/dd must be the soft-min penalty force -k A softmin(d) (ops/contact.h) at every
   // depth: central differences of Simulation::contact_energy under a rigid vertical shift
   // against the sum of the penalty forces of all contact points.
   json j = falling_box(1e5, 50, 0.005);
@@ -216,7 +216,7 @@ TEST(EnergyAudit, ContactPotentialIsTheForcePotential) {
     const double h = 1e-6;
     const double force = -(energy_at(shift + h) - energy_at(shift - h)) / (2 * h);
     double expected = 0;
-    for (const CollisionPoint& c : grid.collision_points) {
+    for (const ContactPoint& c : grid.contact_points) {
       const double y = (1 - c.t) * grid.node_rest[3 * c.node_a + 1] + c.t * grid.node_rest[3 * c.node_b + 1];
       expected += -1e5 * c.area * softmin(y + shift);
     }

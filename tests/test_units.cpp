@@ -3,7 +3,7 @@
 
 #include <cmath>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/sim/body.h"
 #include "models/sim/units.h"
 

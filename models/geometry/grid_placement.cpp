@@ -5,7 +5,7 @@
 #include <cmath>
 #include <limits>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 

@@ -14,7 +14,7 @@
 #include <map>
 #include <string_view>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 

@@ -8,7 +8,7 @@
 #include <limits>
 
 #include "models/geometry/grid_placement.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 

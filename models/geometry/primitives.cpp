@@ -7,7 +7,7 @@
 #include <cmath>
 
 #include "models/geometry/grid_placement.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 

@@ -12,7 +12,7 @@
 #include <fstream>
 #include <iterator>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 

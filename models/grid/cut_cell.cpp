@@ -7,7 +7,7 @@
 // the negative centroid weights do not matter for exact polynomial integration.
 #include "models/grid/cut_cell.h"
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

@@ -9,7 +9,7 @@
 #include "models/grid/marching_tets.h"
 
 #include "models/grid/cut_cell.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 #include <cmath>
 #include <string>

@@ -9,7 +9,7 @@
 #include <map>
 
 #include "models/grid/cut_cell.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 namespace {
@@ -121,7 +121,7 @@ void build_node_cell_incidence(SimGrid& g) {
 constexpr int kCellEdges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
                                    {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
 
-void build_collision_points(SimGrid& g) {
+void build_contact_points(SimGrid& g) {
   std::map<std::pair<int, int>, int> edge_point;
   for (int e = 0; e < g.cell_count; ++e) {
     const auto idx = corner_indices(g.sdf, g.cell_origin[e]);
@@ -133,19 +133,19 @@ void build_collision_points(SimGrid& g) {
       const auto key = std::make_pair(na, nb);
       auto it = edge_point.find(key);
       if (it == edge_point.end()) {
-        CollisionPoint p;
+        ContactPoint p;
         p.node_a = na;
         p.node_b = nb;
         p.t = pa / (pa - pb);
-        it = edge_point.emplace(key, int(g.collision_points.size())).first;
-        g.collision_points.push_back(p);
+        it = edge_point.emplace(key, int(g.contact_points.size())).first;
+        g.contact_points.push_back(p);
       }
       cell_points.push_back(it->second);
     }
-    for (int p : cell_points) g.collision_points[p].area += g.cell_area[e] / double(cell_points.size());
+    for (int p : cell_points) g.contact_points[p].area += g.cell_area[e] / double(cell_points.size());
   }
   std::vector<int> count(g.node_count, 0);
-  for (const auto& p : g.collision_points) {
+  for (const auto& p : g.contact_points) {
     ++count[p.node_a];
     ++count[p.node_b];
   }
@@ -153,9 +153,9 @@ void build_collision_points(SimGrid& g) {
   for (int a = 0; a < g.node_count; ++a) g.node_point_offset[a + 1] = g.node_point_offset[a] + count[a];
   g.node_point_entry.resize(g.node_point_offset.back());
   std::vector<int> fill(g.node_point_offset.begin(), g.node_point_offset.end() - 1);
-  for (int p = 0; p < int(g.collision_points.size()); ++p) {
-    g.node_point_entry[fill[g.collision_points[p].node_a]++] = 2 * p;
-    g.node_point_entry[fill[g.collision_points[p].node_b]++] = 2 * p + 1;
+  for (int p = 0; p < int(g.contact_points.size()); ++p) {
+    g.node_point_entry[fill[g.contact_points[p].node_a]++] = 2 * p;
+    g.node_point_entry[fill[g.contact_points[p].node_b]++] = 2 * p + 1;
   }
 }
 
@@ -231,7 +231,7 @@ SimGrid build_sim_grid(SdfGrid sdf, const GridOptions& options, const std::strin
                                  source));
   integrate_cells(g, options);
   build_node_cell_incidence(g);
-  build_collision_points(g);
+  build_contact_points(g);
   build_band(g, options.band_width);
   return g;
 }

@@ -6,8 +6,8 @@
 //    distance of band_width from an active node; band_width <= 0 means the whole grid;
 //  - each active cell stores its 8 cut-cell volume weights (integral of N_c over the
 //    body part of the cell) and surface weights;
-//  - collision test points are the crossings of the rest surface with the edges of active
-//    cells, each carrying a share of the cut surface area.
+//  - contact points are the crossings of the rest surface with the edges of active cells,
+//    each carrying a share of the cut surface area.
 // Node<->cell and node<->point incidence lists (fixed order) turn every element-to-node
 // sum into a deterministic gather.
 #pragma once
@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "models/geometry/sdf_grid.h"
+#include "runtime/static_arrays.h"
 
 namespace ssc {
 
@@ -26,39 +27,21 @@ struct GridOptions {
   double min_node_volume = 1e-3;       // floor on every corner weight, in units of h^3/8
 };
 
-struct CollisionPoint {
-  int node_a = 0, node_b = 0;  // active node ids
-  double t = 0;                // position (1 - t) x_a + t x_b
-  double area = 0;             // surface area carried, m^2
-};
-
-struct SimGrid {
+// The model's grid: the engine's arrays (runtime/static_arrays.h) and what the model keeps
+// beside them (the SDF, the scan-order maps, surface weights, volumes).
+struct SimGrid : StaticArrays {
   SdfGrid sdf;  // rest SDF after the zero cutoff
-  double h = 0;
-  int cell_count = 0, node_count = 0, band_count = 0;
 
   std::vector<long> cell_origin;              // flat SDF index of corner 0, per cell
-  std::vector<int> cell_nodes;                // 8 per cell: active node id of each corner
-  std::vector<double> cell_volume_weights;    // 8 per cell, m^3 (at least the floor)
   std::vector<double> cell_surface_weights;   // 8 per cell, m^2
   std::vector<double> cell_volume;            // per cell, m^3
   std::vector<double> cell_area;              // per cell, m^2
   std::vector<int> cell_at_origin;            // per SDF node: id of the cell whose corner 0 it is, or -1
 
   std::vector<long> node_grid;                // flat SDF index per active node
-  std::vector<double> node_rest;              // 3 per active node, world position
-  std::vector<double> node_volume;            // per active node: sum of its corner weights, m^3
   int floored_weights = 0;                    // corner weights raised to the floor
-  std::vector<int> node_cell_offset;          // CSR over active nodes ...
-  std::vector<int> node_cell_entry;           // ... entries cell * 8 + corner, ascending
-
-  std::vector<CollisionPoint> collision_points;
-  std::vector<int> node_point_offset;         // CSR over active nodes ...
-  std::vector<int> node_point_entry;          // ... entries point * 2 + side (0: a, 1: b)
 
   std::vector<long> band_grid;                // flat SDF index per band node
-  std::vector<int> band_neighbors;            // 6 per band node: band id >= 0, -(active id) - 2, or -1
-  std::vector<int> band_degree;               // active + band neighbours
   std::vector<int> grid_kind;                 // per SDF node: active id >= 0, -(band id) - 2, or -1
 
   double total_volume = 0;                    // m^3, the body's cut volume (no floor)

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <vector>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 namespace fs = std::filesystem;

@@ -9,7 +9,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 

@@ -18,7 +18,7 @@
 #include <algorithm>
 #include <set>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/run_record.h"
 #include "models/io/text_file.h"
 

@@ -10,7 +10,7 @@
 #include <fstream>
 #include <limits>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 namespace {

@@ -5,7 +5,7 @@
 
 #include <fstream>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 

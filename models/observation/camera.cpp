@@ -7,7 +7,7 @@
 #include <cmath>
 #include <fmt/format.h>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 

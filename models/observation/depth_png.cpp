@@ -18,7 +18,7 @@
 #include <cstring>
 #include <fmt/format.h>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 

@@ -11,7 +11,7 @@
 #include <fmt/format.h>
 #include <random>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 

@@ -19,7 +19,7 @@
 #include <set>
 #include <sstream>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/text_file.h"
 #include "models/io/output_dir.h"
 #include "models/io/run_record.h"

@@ -6,7 +6,7 @@
 #include <cmath>
 #include <deque>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 namespace {

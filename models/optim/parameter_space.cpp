@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/sim/parameter_table.h"
 
 namespace ssc {

@@ -8,7 +8,7 @@
 #include <memory>
 #include <random>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/sim/parameters.h"
 
 namespace ssc {

@@ -7,7 +7,7 @@
 #include "models/geometry/mesh_sdf.h"
 #include "models/geometry/primitives.h"
 #include "models/geometry/sdf_file.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/run_record.h"
 
 #include <cmath>

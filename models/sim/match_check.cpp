@@ -3,7 +3,7 @@
 
 #include <fmt/format.h>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/run_record.h"
 
 namespace ssc {

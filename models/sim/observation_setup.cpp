@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/json_reader.h"
 #include "models/observation/depth_render.h"
 #include "models/sim/deformed_surface.h"

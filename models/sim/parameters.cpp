@@ -5,7 +5,7 @@
 
 #include <algorithm>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/sim/parameter_table.h"
 #include "models/sim/scene.h"
 

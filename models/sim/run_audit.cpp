@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/sim/simulation.h"
 
 namespace ssc {
@@ -67,7 +67,7 @@ std::string initial_penetration(const SimGrid& grid, const PhysicalParameters& p
     const Eigen::Vector3d n = plane.normal.normalized();
     const double allowed = 0.25 * grid.h + 1.0 / plane.softmin_alpha;
     double deepest = 0;
-    for (const CollisionPoint& c : grid.collision_points) {
+    for (const ContactPoint& c : grid.contact_points) {
       Eigen::Vector3d x;
       for (int a = 0; a < 3; ++a) x[a] = (1 - c.t) * grid.node_rest[3 * c.node_a + a] + c.t * grid.node_rest[3 * c.node_b + a];
       deepest = std::max(deepest, plane.height - n.dot(x));

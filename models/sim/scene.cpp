@@ -6,7 +6,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/json_reader.h"
 #include "models/sim/parameters.h"
 

@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/polar.h"
@@ -437,7 +437,7 @@ double Simulation::contact_energy(int b) const {
   double e = 0;
   for (const PlaneSpec& plane : params_[b].planes) {
     const Eigen::Vector3d n = plane.normal.normalized();
-    for (const CollisionPoint& c : grid_.collision_points) {
+    for (const ContactPoint& c : grid_.contact_points) {
       double d = -plane.height;
       for (int a = 0; a < 3; ++a)
         d += n[a] * ((1 - c.t) * (grid_.node_rest[3 * c.node_a + a] + u[3 * c.node_a + a]) +

@@ -78,7 +78,7 @@ class Simulation {
   };
   CellScan scan_cells(int b) const;
   double gravitational_energy(int b) const;  // -m g . x, zero at the origin
-  double contact_energy(int b) const;        // the soft-min penalty's potential (ops/collision.h)
+  double contact_energy(int b) const;        // the soft-min penalty's potential (ops/contact.h)
   int inverted_cell_count(int b) const;      // cells with det F <= 0 at their centre
   // The run's sanity checks and what they saw (models/sim/run_audit.h).
   const SimulationAudit& audit(int b) const { return audits_[b]; }

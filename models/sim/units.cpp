@@ -19,7 +19,7 @@ UnitScales unit_scales(const Scene& scene, const SimGrid& grid) {
     r.require(!r.has("length") && !r.has("mass"), "length", "and mass cannot be combined with object_size/object_mass");
     // The body's extent from its surface points (the rest surface's crossings of grid edges).
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-    for (const CollisionPoint& p : grid.collision_points)
+    for (const ContactPoint& p : grid.contact_points)
       for (int k = 0; k < 3; ++k) {
         const double x = (1 - p.t) * grid.node_rest[3 * p.node_a + k] + p.t * grid.node_rest[3 * p.node_b + k];
         lo[k] = std::min(lo[k], x);

@@ -11,7 +11,7 @@
 
 #include "codegen/cuda_source.h"
 #include "codegen/kernel_plan.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/text_file.h"
 #include "models/io/output_dir.h"
 #include "models/io/run_record.h"

@@ -10,7 +10,7 @@
 #include <regex>
 #include <nlohmann/json.hpp>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/text_file.h"
 #include "models/io/output_dir.h"
 #include "models/io/svg_plot.h"

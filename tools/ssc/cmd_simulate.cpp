@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/text_file.h"
 #include "models/io/output_dir.h"
 #include "models/io/ply_writer.h"
@@ -74,7 +74,7 @@ int run_simulate(const SimulateOptions& o) {
   out.manifest()["device"] = device;
   std::filesystem::create_directories(out.file("frames"));
   note(fmt::format("{}: {} cells, {} nodes, {} band nodes, {} contact points, mass {:.4g} kg", scene.file, grid.cell_count,
-                   grid.node_count, grid.band_count, grid.collision_points.size(), sim.total_mass()));
+                   grid.node_count, grid.band_count, grid.contact_points.size(), sim.total_mass()));
 
   nlohmann::json frames = nlohmann::json::array();
   auto write_frame = [&](int frame) {
@@ -104,7 +104,7 @@ int run_simulate(const SimulateOptions& o) {
                      {"cells", grid.cell_count},
                      {"nodes", grid.node_count},
                      {"band_nodes", grid.band_count},
-                     {"contact_points", grid.collision_points.size()},
+                     {"contact_points", grid.contact_points.size()},
                      {"volume", grid.total_volume},
                      {"floored_weights", grid.floored_weights}};
   summary["mass"] = sim.total_mass();

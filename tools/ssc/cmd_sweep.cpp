@@ -6,7 +6,7 @@
 #include <fstream>
 
 #include "models/cost/baselines.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/text_file.h"
 #include "models/io/output_dir.h"
 #include "models/io/svg_plot.h"

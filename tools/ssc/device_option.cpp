@@ -3,7 +3,7 @@
 
 #include <cstdio>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/sim/simulation.h"
 #include "runtime/cuda_runtime.h"
 #include "tools/ssc/progress.h"

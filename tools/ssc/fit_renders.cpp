@@ -8,7 +8,7 @@
 #include <fstream>
 
 #include "models/cost/surface_constraint.h"
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/text_file.h"
 #include "models/observation/camera.h"
 #include "models/sim/deformed_surface.h"

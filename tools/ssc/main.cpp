@@ -1,11 +1,11 @@
 // ssc command-line entry point: dispatches to the subcommands and turns every error into
-// one clear message and its exit code (models/io/errors.h, docs/cli.md).
+// one clear message and its exit code (runtime/errors.h, docs/cli.md).
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
 
-#include "models/io/errors.h"
+#include "runtime/errors.h"
 #include "models/io/run_record.h"
 #include "runtime/cuda_runtime.h"
 #include "runtime/nvrtc_compiler.h"

@@ -1,0 +1,38 @@
+// The body's fixed arrays that the engine's ops read: sizes of the iteration domains, the
+// cell and node geometry, the incidence lists that make every element-to-node sum a
+// deterministic gather, the contact points and the band's neighbour lists. The model's grid
+// (models/grid/sim_grid.h) builds them; the engine (runtime/, codegen/) sees only this.
+#pragma once
+#include <vector>
+
+namespace ssc {
+
+// A point of the rest surface where ground contact is tested: the crossing of the surface
+// with the edge between active nodes a and b.
+struct ContactPoint {
+  int node_a = 0, node_b = 0;  // active node ids
+  double t = 0;                // position (1 - t) x_a + t x_b
+  double area = 0;             // surface area carried, m^2
+};
+
+struct StaticArrays {
+  double h = 0;  // cell size, m
+  int cell_count = 0, node_count = 0, band_count = 0;
+
+  std::vector<int> cell_nodes;              // 8 per cell: active node id of each corner
+  std::vector<double> cell_volume_weights;  // 8 per cell, m^3 (at least the floor)
+
+  std::vector<double> node_rest;            // 3 per active node, world position
+  std::vector<double> node_volume;          // per active node: sum of its corner weights, m^3
+  std::vector<int> node_cell_offset;        // CSR over active nodes ...
+  std::vector<int> node_cell_entry;         // ... entries cell * 8 + corner, ascending
+
+  std::vector<ContactPoint> contact_points;
+  std::vector<int> node_point_offset;       // CSR over active nodes ...
+  std::vector<int> node_point_entry;        // ... entries point * 2 + side (0: a, 1: b)
+
+  std::vector<int> band_neighbors;          // 6 per band node: band id >= 0, -(active id) - 2, or -1
+  std::vector<int> band_degree;             // active + band neighbours
+};
+
+}  // namespace ssc
