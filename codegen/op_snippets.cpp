@@ -70,7 +70,7 @@ Snippet forward_snippet(const Graph& g, int op) {
     case OpKind::NodeMass:
       return Builder(g, op, "node_mass", Extent::Node)
           .t("density").t("mass", true).grid("node_volume", "Real")
-          .code("$mass[i] = $density[0] * g_node_volume[i];\n");
+          .code("$mass[i] = ops::node_mass($density[0], g_node_volume[i]);\n");
     case OpKind::Corotation:
       return Builder(g, op, "corotation", Extent::Cell)
           .t("u_prev", false, true).t("rotation", true).t("polar_status", true).grid("cell_nodes", "int")
@@ -97,12 +97,14 @@ Snippet forward_snippet(const Graph& g, int op) {
       b.t("corner_force", false, true).t("mass").t("gravity").t("force", true);
       b.grid("node_cell_offset", "int").grid("node_cell_entry", "int");
       std::string code =
-          "Vec3<Real> s = $mass[i] * load3($gravity, 0) + ops::gather_corner_sum($corner_force, g_node_cell_offset, g_node_cell_entry, i);\n";
+          "const Vec3<Real> corners = ops::gather_corner_sum($corner_force, g_node_cell_offset, g_node_cell_entry, i);\n";
       if (has_slot(o, "point_force")) {
         b.t("point_force", false, true).grid("point_t", "Real").grid("node_point_offset", "int").grid("node_point_entry", "int");
-        code += "s += ops::gather_point_sum($point_force, g_point_t, g_node_point_offset, g_node_point_entry, i);\n";
+        code += "const Vec3<Real> points = ops::gather_point_sum($point_force, g_point_t, g_node_point_offset, g_node_point_entry, i);\n";
+      } else {
+        code += "const Vec3<Real> points = zero3<Real>();\n";
       }
-      return b.code(code + "store3($force, i, s);\n");
+      return b.code(code + "store3($force, i, ops::node_force($mass[i], load3($gravity, 0), corners, points));\n");
     }
     case OpKind::StiffnessApply:
       return Builder(g, op, "stiffness_apply", Extent::Cell)
@@ -162,7 +164,9 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
     case OpKind::NodeMass:
       s.push_back(Builder(g, op, "node_mass", Extent::Node)
                       .a("mass", false).grid("node_volume", "Real").scratch("red", "red_" + n, "double", Domain::Node, 1, true)
-                      .code("$red[i] = double($d_mass[i]) * double(g_node_volume[i]);\n"));
+                      .code("double density_bar = 0;\n"
+                            "ops::adj_node_mass(double(g_node_volume[i]), double($d_mass[i]), density_bar);\n"
+                            "$red[i] = density_bar;\n"));
       s.push_back(Builder(g, op, "node_mass_reduce", Extent::Item)
                       .a("density").scratch("red", "red_" + n, "double", Domain::Node, 1, false).barrier()
                       .code("double sum[1] = {0};\n"
@@ -250,9 +254,9 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
       s.push_back(Builder(g, op, "node_force", Extent::Node)
                       .a("force", false).t("mass").t("gravity").a("mass")
                       .scratch("red", "red_" + n, "double", Domain::Node, 3, true)
-                      .code("const Vec3<Real> fb = load3($d_force, i);\n"
-                            "$d_mass[i] += dot(fb, load3($gravity, 0));\n"
-                            "for (int k = 0; k < 3; ++k) $red[3 * i + k] = double($mass[i]) * double(fb[k]);\n"));
+                      .code("Vec3<Real> gravity_bar = zero3<Real>(), sum_bar = zero3<Real>();\n"
+                            "ops::adj_node_force($mass[i], load3($gravity, 0), load3($d_force, i), $d_mass[i], gravity_bar, sum_bar);\n"
+                            "for (int k = 0; k < 3; ++k) $red[3 * i + k] = double(gravity_bar[k]);\n"));
       s.push_back(Builder(g, op, "node_force_reduce", Extent::Item)
                       .a("gravity").scratch("red", "red_" + n, "double", Domain::Node, 3, false).barrier()
                       .code("double gb[3] = {0, 0, 0};\n"
@@ -293,14 +297,17 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
       node.a("mass").a("u_prev").a("v_prev").a("force").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
       node.scratch("red", "red_" + n, "double", Domain::Node, 2, true);
       s.push_back(node.code(std::string(kCoefficients) +
-                            "const Vec3<Real> rb = load3($d_rhs, i), ui = load3($u_prev, i), vi = load3($v_prev, i);\n"
                             "const Vec3<Real> kui = ops::gather_corner_sum($ku_corner, g_node_cell_offset, g_node_cell_entry, i);\n"
-                            "$d_mass[i] += dot(rb, c.a_m * ui + c.inv_theta * vi);\n"
-                            "add3($d_u_prev, i, (c.a_m * $mass[i]) * rb);\n"
-                            "add3($d_v_prev, i, ($mass[i] * c.inv_theta) * rb);\n"
-                            "add3($d_force, i, c.dt * rb);\n"
-                            "$red[2 * i] = double($mass[i]) * double(dot(rb, ui));\n"
-                            "$red[2 * i + 1] = double(dot(rb, kui));\n"));
+                            "Vec3<Real> ub = load3($d_u_prev, i), vb = load3($d_v_prev, i), fb = load3($d_force, i);\n"
+                            "Vec3<Real> kb = zero3<Real>();  // the corners' share: newmark_rhs_corners\n"
+                            "ops::NewmarkCoefficientBars<Real> cb;\n"
+                            "ops::adj_newmark_rhs(c, $mass[i], load3($u_prev, i), load3($v_prev, i), kui, load3($d_rhs, i), "
+                            "$d_mass[i], ub, vb, kb, fb, cb);\n"
+                            "store3($d_u_prev, i, ub);\n"
+                            "store3($d_v_prev, i, vb);\n"
+                            "store3($d_force, i, fb);\n"
+                            "$red[2 * i] = double(cb.a_m);\n"
+                            "$red[2 * i + 1] = double(cb.b_k);\n"));
       s.push_back(Builder(g, op, "newmark_rhs_reduce", Extent::Item)
                       .a("mass_damping").a("stiffness_damping").scratch("red", "red_" + n, "double", Domain::Node, 2, false).barrier()
                       .code("double ab[2] = {0, 0};\n"
@@ -338,11 +345,12 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
       s.push_back(node.code(std::string(kCoefficients) +
                             "if ($fixed[i] != Real(0)) { $red2[2 * i] = 0; $red2[2 * i + 1] = 0; }\n"
                             "else {\n"
-                            "  const Vec3<Real> wi = load3($w, i), ui = load3($u, i);\n"
                             "  const Vec3<Real> kui = ops::gather_corner_sum($ku, g_node_cell_offset, g_node_cell_entry, i);\n"
-                            "  $d_mass[i] -= c.a_m * dot(wi, ui);\n"
-                            "  $red2[2 * i] = -(double($mass[i]) * double(dot(wi, ui)));\n"
-                            "  $red2[2 * i + 1] = -double(dot(wi, kui));\n"
+                            "  Vec3<Real> ub = zero3<Real>(), kb = zero3<Real>();\n"
+                            "  ops::NewmarkCoefficientBars<Real> cb;\n"
+                            "  ops::adj_newmark_system_apply(c, $mass[i], load3($u, i), kui, Real(-1) * load3($w, i), $d_mass[i], ub, kb, cb);\n"
+                            "  $red2[2 * i] = double(cb.a_m);\n"
+                            "  $red2[2 * i + 1] = double(cb.a_k);\n"
                             "}\n"));
       s.push_back(Builder(g, op, "newmark_solve_reduce", Extent::Item)
                       .a("lambda").a("mu").a("mass_damping").a("stiffness_damping")
@@ -363,13 +371,12 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
     case OpKind::VelocityUpdate:
       s.push_back(Builder(g, op, "velocity_update", Extent::Node)
                       .t("dt").t("theta").a("v", false).a("u").a("u_prev").a("v_prev")
-                      .code("const Real s = Real(1) / ($theta[0] * $dt[0]), q = (Real(1) - $theta[0]) / $theta[0];\n"
-                            "for (int k = 0; k < 3; ++k) {\n"
-                            "  const int j = 3 * i + k;\n"
-                            "  $d_u[j] += s * $d_v[j];\n"
-                            "  $d_u_prev[j] -= s * $d_v[j];\n"
-                            "  $d_v_prev[j] -= q * $d_v[j];\n"
-                            "}\n"));
+                      .code("const ops::NewmarkCoefficients<Real> c = ops::newmark_coefficients($dt[0], $theta[0], Real(0), Real(0));\n"
+                            "Vec3<Real> ub = load3($d_u, i), upb = load3($d_u_prev, i), vpb = load3($d_v_prev, i);\n"
+                            "ops::adj_newmark_velocity(c, load3($d_v, i), ub, upb, vpb);\n"
+                            "store3($d_u, i, ub);\n"
+                            "store3($d_u_prev, i, upb);\n"
+                            "store3($d_v_prev, i, vpb);\n"));
       break;
     case OpKind::ExtensionSolve:
       for (Snippet& x : solver_snippets(g, op, true)) s.push_back(x);

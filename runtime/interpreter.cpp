@@ -12,6 +12,7 @@
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/newmark.h"
+#include "ops/nodal.h"
 #include "ops/polar.h"
 #include "runtime/batch_loop.h"
 #include "runtime/cpu_kernels.h"
@@ -93,7 +94,7 @@ void Interpreter<Real>::execute_item(const OpNode& op, int b) {
     case OpKind::NodeMass: {
       const Real rho = a.scalar("density");
       Real* m = a.out("mass");
-      for (int i = 0; i < g.node_count; ++i) m[i] = rho * Real(g.node_volume[i]);
+      for (int i = 0; i < g.node_count; ++i) m[i] = ops::node_mass(rho, Real(g.node_volume[i]));
       break;
     }
     case OpKind::Corotation: {
@@ -151,10 +152,11 @@ void Interpreter<Real>::execute_item(const OpNode& op, int b) {
       Real* f = a.out("force");
 #pragma omp parallel for schedule(static) if (g.node_count >= kParallelThreshold)
       for (int i = 0; i < g.node_count; ++i) {
-        Vec3<Real> s = m[i] * grav + ops::gather_corner_sum(corner, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
-        if (point)
-          s += ops::gather_point_sum(point, point_t_.data(), g.node_point_offset.data(), g.node_point_entry.data(), i);
-        store3(f, i, s);
+        const Vec3<Real> corners = ops::gather_corner_sum(corner, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+        const Vec3<Real> points =
+            point ? ops::gather_point_sum(point, point_t_.data(), g.node_point_offset.data(), g.node_point_entry.data(), i)
+                  : zero3<Real>();
+        store3(f, i, ops::node_force(m[i], grav, corners, points));
       }
       break;
     }

@@ -9,6 +9,7 @@
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/newmark.h"
+#include "ops/nodal.h"
 #include "ops/polar.h"
 #include "runtime/batch_loop.h"
 #include "runtime/cpu_kernels.h"
@@ -70,7 +71,7 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
     case OpKind::NodeMass: {
       const Real* m_bar = d.out("mass");
       double s = 0;
-      for (int i = 0; i < g.node_count; ++i) s += double(m_bar[i]) * g.node_volume[i];
+      for (int i = 0; i < g.node_count; ++i) ops::adj_node_mass(g.node_volume[i], double(m_bar[i]), s);
       const_cast<Real*>(d.in("density"))[0] += Real(s);
       break;
     }
@@ -177,9 +178,9 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       Real* m_bar = const_cast<Real*>(d.in("mass"));
       double gb[3] = {0, 0, 0};
       for (int i = 0; i < g.node_count; ++i) {
-        const Vec3<Real> fb = load3(f_bar, i);
-        m_bar[i] += dot(fb, grav);
-        for (int k = 0; k < 3; ++k) gb[k] += double(m[i]) * double(fb[k]);
+        Vec3<Real> grav_bar = zero3<Real>(), sum_bar = zero3<Real>();
+        ops::adj_node_force(m[i], grav, load3(f_bar, i), m_bar[i], grav_bar, sum_bar);
+        for (int k = 0; k < 3; ++k) gb[k] += double(grav_bar[k]);
       }
       Real* g_bar = const_cast<Real*>(d.in("gravity"));
       for (int k = 0; k < 3; ++k) g_bar[k] += Real(gb[k]);
@@ -218,23 +219,27 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
                                                a.scalar("stiffness_damping"));
       const Real *m = a.in("mass"), *u = a.in("u_prev"), *v = a.in("v_prev"), *ku = a.in("ku_corner");
       const Real* r_bar = d.out("rhs");
+      Real *m_bar = const_cast<Real*>(d.in("mass")), *u_bar = const_cast<Real*>(d.in("u_prev"));
+      Real *v_bar = const_cast<Real*>(d.in("v_prev")), *f_bar = const_cast<Real*>(d.in("force"));
+      std::vector<Real> ku_node_bar(3 * size_t(g.node_count));
+      double alpha_bar = 0, beta_bar = 0;
+      for (int i = 0; i < g.node_count; ++i) {
+        const Vec3<Real> kui = ops::gather_corner_sum(ku, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+        Vec3<Real> ub = load3(u_bar, i), vb = load3(v_bar, i), fb = load3(f_bar, i), kb = zero3<Real>();
+        ops::NewmarkCoefficientBars<Real> cb;
+        ops::adj_newmark_rhs(c, m[i], load3(u, i), load3(v, i), kui, load3(r_bar, i), m_bar[i], ub, vb, kb, fb, cb);
+        store3(u_bar, i, ub);
+        store3(v_bar, i, vb);
+        store3(f_bar, i, fb);
+        store3(ku_node_bar.data(), i, kb);
+        alpha_bar += double(cb.a_m);
+        beta_bar += double(cb.b_k);
+      }
+      // The corners' share of the node's (K u-) cotangent: the adjoint of the gather.
       Real* ku_bar = const_cast<Real*>(d.in("ku_corner"));
 #pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
       for (int e = 0; e < g.cell_count; ++e)
-        for (int k = 0; k < 8; ++k) add3(ku_bar, 8 * e + k, c.b_k * load3(r_bar, g.cell_nodes[8 * e + k]));
-      Real *m_bar = const_cast<Real*>(d.in("mass")), *u_bar = const_cast<Real*>(d.in("u_prev"));
-      Real *v_bar = const_cast<Real*>(d.in("v_prev")), *f_bar = const_cast<Real*>(d.in("force"));
-      double alpha_bar = 0, beta_bar = 0;
-      for (int i = 0; i < g.node_count; ++i) {
-        const Vec3<Real> rb = load3(r_bar, i), ui = load3(u, i), vi = load3(v, i);
-        const Vec3<Real> kui = ops::gather_corner_sum(ku, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
-        m_bar[i] += dot(rb, c.a_m * ui + c.inv_theta * vi);
-        add3(u_bar, i, (c.a_m * m[i]) * rb);
-        add3(v_bar, i, (m[i] * c.inv_theta) * rb);
-        add3(f_bar, i, c.dt * rb);
-        alpha_bar += double(m[i]) * double(dot(rb, ui));
-        beta_bar += double(dot(rb, kui));
-      }
+        for (int k = 0; k < 8; ++k) add3(ku_bar, 8 * e + k, load3(ku_node_bar.data(), g.cell_nodes[8 * e + k]));
       const_cast<Real*>(d.in("mass_damping"))[0] += Real(alpha_bar);
       const_cast<Real*>(d.in("stiffness_damping"))[0] += Real(beta_bar);
       break;
@@ -284,26 +289,29 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       double alpha_bar = 0, beta_bar = 0;
       for (int i = 0; i < g.node_count; ++i) {
         if (fixed[i] != Real(0)) continue;
-        const Vec3<Real> wi = load3(w.data(), i), ui = load3(u, i);
+        // The parameters' share of -mu_adj^T A u: the system's adjoint at y_bar = -mu_adj.
         const Vec3<Real> kui = ops::gather_corner_sum(ku.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
-        m_bar[i] -= c.a_m * dot(wi, ui);
-        alpha_bar -= double(m[i]) * double(dot(wi, ui));
-        beta_bar -= double(dot(wi, kui));
+        Vec3<Real> ub = zero3<Real>(), kb = zero3<Real>();
+        ops::NewmarkCoefficientBars<Real> cb;
+        ops::adj_newmark_system_apply(c, m[i], load3(u, i), kui, Real(-1) * load3(w.data(), i), m_bar[i], ub, kb, cb);
+        alpha_bar += double(cb.a_m);
+        beta_bar += double(cb.a_k);
       }
       const_cast<Real*>(d.in("mass_damping"))[0] += Real(alpha_bar);
       const_cast<Real*>(d.in("stiffness_damping"))[0] += Real(beta_bar);
       break;
     }
     case OpKind::VelocityUpdate: {
-      const Real dt = a.scalar("dt"), theta = a.scalar("theta");
+      const auto c = ops::newmark_coefficients(a.scalar("dt"), a.scalar("theta"), Real(0), Real(0));
       const Real* v_bar = d.out("v");
       Real *u_bar = const_cast<Real*>(d.in("u")), *up_bar = const_cast<Real*>(d.in("u_prev"));
       Real* vp_bar = const_cast<Real*>(d.in("v_prev"));
-      const Real s = Real(1) / (theta * dt), q = (Real(1) - theta) / theta;
-      for (long i = 0; i < 3L * g.node_count; ++i) {
-        u_bar[i] += s * v_bar[i];
-        up_bar[i] -= s * v_bar[i];
-        vp_bar[i] -= q * v_bar[i];
+      for (int i = 0; i < g.node_count; ++i) {
+        Vec3<Real> ub = load3(u_bar, i), upb = load3(up_bar, i), vpb = load3(vp_bar, i);
+        ops::adj_newmark_velocity(c, load3(v_bar, i), ub, upb, vpb);
+        store3(u_bar, i, ub);
+        store3(up_bar, i, upb);
+        store3(vp_bar, i, vpb);
       }
       break;
     }

@@ -33,6 +33,7 @@
 #include "ops/contact.h"
 #include "ops/elasticity.h"
 #include "ops/newmark.h"
+#include "ops/nodal.h"
 #include "ops/polar.h"
 #include "ops/ssc_math.h"
 #include "ops/trilinear.h"
@@ -584,6 +585,158 @@ TrilinearCase make_trilinear(Rng& rng, int) {
 
 // ------------------------------------------------------------------------------------------
 // OpAdjoint: dot-product and finite-difference tests
+
+// ---- the node-level parts: Newmark right-hand side, system apply, velocity; nodal mass and force
+
+// x = (alpha, beta, mass, u-, v-, (K u-), force); dt and theta fixed (not differentiated).
+struct NewmarkRhsCase {
+  double dt, theta;
+  std::vector<double> x, scale;
+  template <class R>
+  std::vector<R> forward(const std::vector<R>& x) const {
+    const auto c = ops::newmark_coefficients(R(dt), R(theta), x[0], x[1]);
+    std::vector<R> y;
+    put3(y, ops::newmark_rhs(c, x[2], get3(x, 3), get3(x, 6), get3(x, 9), get3(x, 12)));
+    return y;
+  }
+  std::vector<double> vjp(const std::vector<double>& yb, std::vector<double> acc) const {
+    const auto c = ops::newmark_coefficients(dt, theta, x[0], x[1]);
+    Vec3<double> ub = get3(acc, 3), vb = get3(acc, 6), kb = get3(acc, 9), fb = get3(acc, 12);
+    ops::NewmarkCoefficientBars<double> cb;
+    ops::adj_newmark_rhs(c, x[2], get3(x, 3), get3(x, 6), get3(x, 9), get3(yb, 0), acc[2], ub, vb, kb, fb, cb);
+    ops::adj_newmark_coefficients(cb, acc[0], acc[1]);
+    store_vec(acc, 3, ub), store_vec(acc, 6, vb), store_vec(acc, 9, kb), store_vec(acc, 12, fb);
+    return acc;
+  }
+};
+
+// x = (alpha, beta, mass, p, (K p)).
+struct NewmarkSystemApplyCase {
+  double dt, theta;
+  std::vector<double> x, scale;
+  template <class R>
+  std::vector<R> forward(const std::vector<R>& x) const {
+    const auto c = ops::newmark_coefficients(R(dt), R(theta), x[0], x[1]);
+    std::vector<R> y;
+    put3(y, ops::newmark_system_apply(c, x[2], get3(x, 3), get3(x, 6)));
+    return y;
+  }
+  std::vector<double> vjp(const std::vector<double>& yb, std::vector<double> acc) const {
+    const auto c = ops::newmark_coefficients(dt, theta, x[0], x[1]);
+    Vec3<double> pb = get3(acc, 3), kb = get3(acc, 6);
+    ops::NewmarkCoefficientBars<double> cb;
+    ops::adj_newmark_system_apply(c, x[2], get3(x, 3), get3(x, 6), get3(yb, 0), acc[2], pb, kb, cb);
+    ops::adj_newmark_coefficients(cb, acc[0], acc[1]);
+    store_vec(acc, 3, pb), store_vec(acc, 6, kb);
+    return acc;
+  }
+};
+
+// x = (u, u-, v-).
+struct NewmarkVelocityCase {
+  double dt, theta;
+  std::vector<double> x, scale;
+  template <class R>
+  std::vector<R> forward(const std::vector<R>& x) const {
+    const auto c = ops::newmark_coefficients(R(dt), R(theta), R(0), R(0));
+    std::vector<R> y;
+    put3(y, ops::newmark_velocity(c, get3(x, 0), get3(x, 3), get3(x, 6)));
+    return y;
+  }
+  std::vector<double> vjp(const std::vector<double>& yb, std::vector<double> acc) const {
+    const auto c = ops::newmark_coefficients(dt, theta, 0.0, 0.0);
+    Vec3<double> ub = get3(acc, 0), upb = get3(acc, 3), vpb = get3(acc, 6);
+    ops::adj_newmark_velocity(c, get3(yb, 0), ub, upb, vpb);
+    store_vec(acc, 0, ub), store_vec(acc, 3, upb), store_vec(acc, 6, vpb);
+    return acc;
+  }
+};
+
+// x = (density); the node's volume is data.
+struct NodeMassCase {
+  double volume;
+  std::vector<double> x, scale;
+  template <class R>
+  std::vector<R> forward(const std::vector<R>& x) const {
+    return {ops::node_mass(x[0], R(volume))};
+  }
+  std::vector<double> vjp(const std::vector<double>& yb, std::vector<double> acc) const {
+    ops::adj_node_mass(volume, yb[0], acc[0]);
+    return acc;
+  }
+};
+
+// x = (mass, gravity, corner sum, point sum).
+struct NodeForceCase {
+  std::vector<double> x, scale;
+  template <class R>
+  std::vector<R> forward(const std::vector<R>& x) const {
+    std::vector<R> y;
+    put3(y, ops::node_force(x[0], get3(x, 1), get3(x, 4), get3(x, 7)));
+    return y;
+  }
+  std::vector<double> vjp(const std::vector<double>& yb, std::vector<double> acc) const {
+    Vec3<double> gb = get3(acc, 1), sum_bar = zero3<double>();
+    ops::adj_node_force(x[0], get3(x, 1), get3(yb, 0), acc[0], gb, sum_bar);
+    store_vec(acc, 1, gb);
+    for (int k = 0; k < 3; ++k) acc[4 + k] += sum_bar[k], acc[7 + k] += sum_bar[k];
+    return acc;
+  }
+};
+
+void push_random(std::vector<double>& x, std::vector<double>& scale, Rng& rng, int n, double size) {
+  for (int i = 0; i < n; ++i) x.push_back(size * uni(rng, -1, 1)), scale.push_back(size);
+}
+
+template <class Case>
+Case newmark_case(Rng& rng, int n_vectors) {
+  Case c;
+  c.dt = uni(rng, 1e-3, 2e-2);
+  c.theta = uni(rng, 0.5, 1.0);
+  c.x = {uni(rng, 0.01, 1.0), uni(rng, 1e-3, 0.1), uni(rng, 1e-3, 1.0)};
+  c.scale = {c.x[0], c.x[1], c.x[2]};
+  push_random(c.x, c.scale, rng, 3 * n_vectors, 0.1);
+  return c;
+}
+
+TEST(OpAdjointNewmark, RightHandSide) {
+  run_cases("newmark_rhs", kSeeds, [](Rng& rng, int) { return newmark_case<NewmarkRhsCase>(rng, 4); });
+}
+
+TEST(OpAdjointNewmark, SystemApply) {
+  run_cases("newmark_system_apply", kSeeds, [](Rng& rng, int) { return newmark_case<NewmarkSystemApplyCase>(rng, 2); });
+}
+
+TEST(OpAdjointNewmark, Velocity) {
+  run_cases("newmark_velocity", kSeeds, [](Rng& rng, int) {
+    NewmarkVelocityCase c;
+    c.dt = uni(rng, 1e-3, 2e-2);
+    c.theta = uni(rng, 0.5, 1.0);
+    push_random(c.x, c.scale, rng, 9, 0.1);
+    return c;
+  });
+}
+
+TEST(OpAdjointNodal, Mass) {
+  run_cases("node_mass", kSeeds, [](Rng& rng, int) {
+    NodeMassCase c;
+    c.volume = uni(rng, 1e-6, 1e-3);
+    c.x = {uni(rng, 10, 1000)};
+    c.scale = {c.x[0]};
+    return c;
+  });
+}
+
+TEST(OpAdjointNodal, Force) {
+  run_cases("node_force", kSeeds, [](Rng& rng, int) {
+    NodeForceCase c;
+    c.x = {uni(rng, 1e-3, 1.0)};
+    c.scale = {c.x[0]};
+    push_random(c.x, c.scale, rng, 3, 10.0);
+    push_random(c.x, c.scale, rng, 6, 1.0);
+    return c;
+  });
+}
 
 TEST(OpAdjointElasticity, LameFromYoung) { run_cases("lame_from_young", kSeeds, make_lame); }
 
