@@ -31,6 +31,7 @@
 #include "runtime/static_arrays.h"
 #include "runtime/interpreter.h"
 #include "runtime/nvrtc_compiler.h"
+#include "runtime/step_backend.h"
 #include "runtime/tensor_store.h"
 
 namespace ssc {
@@ -71,43 +72,43 @@ struct GpuKernelTiming {
   int registers = 0;
 };
 
-class GpuTimestep {
+class GpuTimestep : public StepBackend {
  public:
   // Throws GpuUnavailable when there is no usable GPU, NvrtcError when a kernel fails.
   GpuTimestep(const Graph& graph, const StaticArrays& grid, int batch, const SolverOptions& solver,
               const GpuOptions& options = {});
-  ~GpuTimestep();
+  ~GpuTimestep() override;
   GpuTimestep(const GpuTimestep&) = delete;
   GpuTimestep& operator=(const GpuTimestep&) = delete;
 
   // Copies every input and state tensor (all batch items) to the device; with
   // intermediates, every tensor (tests of single kernels).
-  void upload(const TensorStore<double>& store, bool intermediates = false);
+  void upload(const TensorStore<double>& store, bool intermediates = false) override;
   // One forward step; throws SimulationError if a solve does not converge.
-  void run();
+  void run() override;
   // Copies every tensor back (converted to double), or one tensor (all batch items).
   void download(TensorStore<double>& store) const;
-  void download(TensorStore<double>& store, int tensor) const;
+  void download(TensorStore<double>& store, int tensor) const override;
   // Device copies between tensors of one size (from, to): the step's outputs become the
   // next step's state without a host round trip.
-  void copy_tensors(const std::vector<std::pair<int, int>>& from_to);
+  void copy_tensors(const std::vector<std::pair<int, int>>& from_to) override;
   // Device snapshots of tensors (all batch items) under an integer key: the state
   // checkpoints of a backward pass, kept on the device. save_snapshot copies the tensors
   // in (the key's buffer is allocated on first use, or reused from a dropped one),
   // load_snapshot copies the same tensors back, drop_snapshot releases the key.
-  void save_snapshot(int key, const std::vector<int>& tensors);
-  void load_snapshot(int key, const std::vector<int>& tensors);
-  void drop_snapshot(int key);
-  size_t free_device_memory() const;  // bytes, as the driver reports them now
+  void save_snapshot(int key, const std::vector<int>& tensors) override;
+  void load_snapshot(int key, const std::vector<int>& tensors) override;
+  void drop_snapshot(int key) override;
+  size_t free_device_memory() const override;  // bytes, as the driver reports them now
 
   // Adjoint of the step whose forward values the device holds: those the last run()
   // computed, or a kept step put back by load_snapshot (the adjoint reads no other state). clear_adjoints(true) zeroes every cotangent and starts a backward pass;
   // clear_adjoints(false), once per step, keeps the inputs' (parameter) cotangents, which
   // accumulate. set_adjoint seeds a tensor's cotangent (all batch items, as the store's
   // layout); get_adjoint reads one back.
-  void clear_adjoints(bool including_inputs);
-  void set_adjoint(int tensor, const std::vector<double>& all_items);
-  void get_adjoint(int tensor, std::vector<double>& all_items) const;
+  void clear_adjoints(bool including_inputs) override;
+  void set_adjoint(int tensor, const std::vector<double>& all_items) override;
+  void get_adjoint(int tensor, std::vector<double>& all_items) const override;
   // A copy of every cotangent on the device, and its restoration as the start of a
   // backward pass (a repeated adjoint step from the same seeds without uploads).
   void save_adjoints();
@@ -115,14 +116,14 @@ class GpuTimestep {
   // The next (earlier) step of a backward pass, on the device: each (from, to) cotangent
   // moves (the previous state's become the step outputs'), every other non-input
   // cotangent is cleared.
-  void chain_adjoints(const std::vector<std::pair<int, int>>& from_to);
+  void chain_adjoints(const std::vector<std::pair<int, int>>& from_to) override;
   // One adjoint step; throws SimulationError if an adjoint solve does not converge.
-  void run_adjoint();
+  void run_adjoint() override;
   // Kernels [first, last] of the forward (adjoint) plan alone, on what the device holds;
   // a solver stage among them launches its op's whole solve (tests of single kernels).
   void run_kernels(bool adjoint, int first, int last);
 
-  const std::vector<int>& cg_iterations() const;
+  const std::vector<int>& cg_iterations() const override;
   const std::vector<int>& adjoint_cg_iterations() const;  // of the last run_adjoint()'s time-step solve
   std::vector<GpuKernelTiming> timings() const;  // per kernel, with options.profile
   double compile_seconds() const;

@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "runtime/batch_loop.h"
-#include "runtime/cuda_runtime.h"
+#include "runtime/step_backend.h"
 
 namespace ssc {
 namespace {
@@ -17,11 +17,11 @@ struct FrameSeed {
 };
 
 // 0: every step kept whole (no recomputation); k > 0: the state of every k-th step.
-// On the GPU the budget is at most half the device memory free now.
+// The budget is at most half the memory free now where the steps run.
 int choose_checkpoint_interval(Simulation& sim, int steps, const GradientOptions& o) {
   if (o.checkpoint_every > 0) return o.checkpoint_every;
   double budget = o.memory_budget_bytes;
-  if (sim.gpu()) budget = std::min(budget, 0.5 * double(sim.gpu()->free_device_memory()));
+  budget = std::min(budget, 0.5 * double(sim.backend().free_device_memory()));
   if (double(steps) * double(sim.step_bytes()) <= budget) return 0;
   const SimGrid& g = sim.grid();
   const double bytes = double(steps + 1) * sim.batch() * 8.0 * (6.0 * g.node_count + 3.0 * g.band_count);
@@ -110,16 +110,13 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
   }
   if (!options.gradient) return results;
 
-  // The backward pass runs where the steps run: the interpreter's adjoint, or the
-  // generated adjoint kernels on the GPU (every cotangent stays on the device between
-  // steps; the host adds the frames' seeds and reads the parameters' at the end).
-  Interpreter<double>& in = sim.interpreter();
-  TensorStore<double>& adj = in.adjoint();
-  GpuTimestep* gpu = sim.gpu();
-  in.clear_adjoints(true);
-  if (gpu) gpu->clear_adjoints(true);
+  // The backward pass runs where the steps run (the interpreter's adjoint, or the generated
+  // adjoint kernels on the GPU): the state's cotangents stay there from step to step, the
+  // host adds the frames' seeds and reads the parameters' cotangents at the end.
+  TensorStore<double>& adj = sim.interpreter().adjoint();
+  StepBackend& backend = sim.backend();
+  backend.clear_adjoints(true);
   const size_t n3 = 3 * size_t(g.node_count), b3 = 3 * size_t(g.band_count);
-  std::vector<std::vector<double>> u_bar(B, std::vector<double>(n3, 0.0)), v_bar(B, std::vector<double>(n3, 0.0));
   for (int t = steps; t >= 1; --t) {
     if (K == 0) {
       sim.load_step(t);
@@ -138,52 +135,28 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
       sim.drop_checkpoint(t - 1);  // no later (earlier-step) iteration needs it
       saved.erase(t - 1);
     }
-    if (gpu) {
-      // The state's cotangents stay on the device from step to step; the host adds the
-      // frames' seeds where there are any.
-      if (t == steps)
-        gpu->clear_adjoints(false);
-      else
-        gpu->chain_adjoints({{tg.u_prev, tg.u}, {tg.v_prev, tg.v}});
-      if (seeds[0].count(t)) {
-        std::vector<double>& ub = adj.all(tg.u);
-        std::vector<double>& bb = adj.all(tg.band_u);
-        gpu->get_adjoint(tg.u, ub);
-        std::fill(bb.begin(), bb.end(), 0.0);
-        for (int b = 0; b < B; ++b) {
-          const FrameSeed& s = seeds[b].at(t);
-          for (size_t i = 0; i < n3; ++i) ub[b * n3 + i] += s.u_bar[i];
-          std::copy(s.band_bar.begin(), s.band_bar.end(), bb.begin() + b * b3);
-        }
-        gpu->set_adjoint(tg.u, ub);
-        gpu->set_adjoint(tg.band_u, bb);
+    if (t == steps)
+      backend.clear_adjoints(false);
+    else
+      backend.chain_adjoints({{tg.u_prev, tg.u}, {tg.v_prev, tg.v}});
+    if (seeds[0].count(t)) {
+      std::vector<double> ub, bb(B * b3, 0.0);
+      backend.get_adjoint(tg.u, ub);
+      for (int b = 0; b < B; ++b) {
+        const FrameSeed& s = seeds[b].at(t);
+        for (size_t i = 0; i < n3; ++i) ub[b * n3 + i] += s.u_bar[i];
+        std::copy(s.band_bar.begin(), s.band_bar.end(), bb.begin() + b * b3);
       }
-      gpu->run_adjoint();
-      continue;
+      backend.set_adjoint(tg.u, ub);
+      backend.set_adjoint(tg.band_u, bb);
     }
-    in.clear_adjoints(false);
-    for (int b = 0; b < B; ++b) {
-      double* ub = adj.data(tg.u, b);
-      double* vb = adj.data(tg.v, b);
-      double* bb = adj.data(tg.band_u, b);
-      std::copy(u_bar[b].begin(), u_bar[b].end(), ub);
-      std::copy(v_bar[b].begin(), v_bar[b].end(), vb);
-      auto it = seeds[b].find(t);
-      if (it != seeds[b].end()) {
-        for (size_t i = 0; i < n3; ++i) ub[i] += it->second.u_bar[i];
-        for (size_t i = 0; i < b3; ++i) bb[i] += it->second.band_bar[i];
-      }
-    }
-    in.run_adjoint();
-    for (int b = 0; b < B; ++b) {
-      std::copy_n(adj.data(tg.u_prev, b), n3, u_bar[b].begin());
-      std::copy_n(adj.data(tg.v_prev, b), n3, v_bar[b].begin());
-    }
+    backend.run_adjoint();
   }
-  if (gpu && steps > 0) {  // the parameters' cotangents, accumulated on the device over the pass
+  std::vector<std::vector<double>> v_bar(B, std::vector<double>(n3, 0.0));
+  if (steps > 0) {  // the parameters' cotangents, accumulated where the steps ran
     for (size_t t = 0; t < tg.graph.tensors().size(); ++t)
-      if (tg.graph.tensor(int(t)).role == TensorInfo::Role::Input) gpu->get_adjoint(int(t), adj.all(int(t)));
-    gpu->get_adjoint(tg.v_prev, adj.all(tg.v_prev));  // the initial state's
+      if (tg.graph.tensor(int(t)).role == TensorInfo::Role::Input) backend.get_adjoint(int(t), adj.all(int(t)));
+    backend.get_adjoint(tg.v_prev, adj.all(tg.v_prev));  // the initial state's
     for (int b = 0; b < B; ++b) std::copy_n(adj.data(tg.v_prev, b), n3, v_bar[b].begin());
   }
 

@@ -13,6 +13,7 @@
 #include "ops/polar.h"
 #include "runtime/batch_loop.h"
 #include "runtime/cuda_runtime.h"
+#include "runtime/interpreter_backend.h"
 #include "runtime/pcg.h"
 
 namespace ssc {
@@ -43,6 +44,7 @@ Simulation::Simulation(const Scene& scene, const SimGrid& grid, int batch, bool 
   options.cg_max_iterations = scene.solver.max_iterations;
   options.extension_tolerance = scene.solver.extension_tolerance;
   interpreter_ = std::make_unique<Interpreter<double>>(graph_.graph, grid_, batch, options);
+  backend_ = std::make_unique<InterpreterBackend>(*interpreter_);
   fixed_.assign(grid.node_count, 0);
   for (int i = 0; i < grid.node_count; ++i) {
     const Eigen::Vector3d x(grid.node_rest[3 * i], grid.node_rest[3 * i + 1], grid.node_rest[3 * i + 2]);
@@ -60,14 +62,13 @@ void Simulation::use_gpu(const std::string& real) {
   GpuOptions options;
   options.real = real;
   sync_host();
-  gpu_ = std::make_unique<GpuTimestep>(graph_.graph, grid_, batch(), interpreter_->options(), options);
+  backend_ = std::make_unique<GpuTimestep>(graph_.graph, grid_, batch(), interpreter_->options(), options);
+  gpu_ = static_cast<GpuTimestep*>(backend_.get());
   device_current_ = false;
-  kept_.clear();  // the old device's snapshots went with it
+  kept_.clear();  // the old backend's snapshots went with it
 }
 
-int Simulation::last_cg_iterations(int b) const {
-  return gpu_ ? gpu_->cg_iterations().at(b) : interpreter_->report().cg_iterations.at(b);
-}
+int Simulation::last_cg_iterations(int b) const { return backend_->cg_iterations().at(b); }
 
 void Simulation::set_parameters(int b, const PhysicalParameters& p) {
   if (p.planes.size() != params_[b].planes.size())
@@ -167,27 +168,22 @@ void Simulation::step_and_keep(int key) { advance(false, key); }
 void Simulation::advance(bool to_host, int keep_key) {
   TensorStore<double>& st = interpreter_->store();
   try {
-    if (gpu_) {
-      if (!device_current_) gpu_->upload(st);
-      device_current_ = false;
-      gpu_->run();
-      if (keep_key >= 0) keep(keep_key, step_tensors(), steps_);
-      if (to_host)
-        for (int t : {graph_.u, graph_.v, graph_.band_u, graph_.cg_iterations})
-          if (t >= 0) gpu_->download(st, t);
-      std::vector<std::pair<int, int>> advance = {{graph_.u, graph_.u_prev}, {graph_.v, graph_.v_prev}};
-      if (graph_.band_u >= 0) advance.push_back({graph_.band_u, graph_.band_guess});
-      gpu_->copy_tensors(advance);
-      device_current_ = true;
-    } else {
-      interpreter_->run();
-      if (keep_key >= 0) keep(keep_key, step_tensors(), steps_);
-    }
+    if (!device_current_) backend_->upload(st);
+    device_current_ = false;
+    backend_->run();
+    if (keep_key >= 0) keep(keep_key, step_tensors(), steps_);
+    if (to_host)
+      for (int t : {graph_.u, graph_.v, graph_.band_u, graph_.cg_iterations})
+        if (t >= 0) backend_->download(st, t);
+    std::vector<std::pair<int, int>> next = {{graph_.u, graph_.u_prev}, {graph_.v, graph_.v_prev}};
+    if (graph_.band_u >= 0) next.push_back({graph_.band_u, graph_.band_guess});
+    backend_->copy_tensors(next);
+    device_current_ = true;
   } catch (const SimulationError& e) {
     throw SimulationError(fmt::format("step {}: {}", steps_ + 1, e.what()));
   }
   ++steps_;
-  if (gpu_ && !to_host) {
+  if (!to_host) {
     host_stale_ = true;
     return;
   }
@@ -203,7 +199,7 @@ void Simulation::advance(bool to_host, int keep_key) {
 void Simulation::sync_host() {
   if (!host_stale_) return;
   TensorStore<double>& st = interpreter_->store();
-  for (int t : state_tensors()) gpu_->download(st, t);
+  for (int t : state_tensors()) backend_->download(st, t);
   host_stale_ = false;
   check_states("by step");  // the steps since the last sync ran unchecked
 }
@@ -227,36 +223,28 @@ size_t Simulation::step_bytes() const {
   return bytes;
 }
 
-// The device must hold the host's state (device_current_) when this runs on the GPU.
+// The backend must hold the host's state (device_current_) when this runs.
 void Simulation::keep(int key, const std::vector<int>& tensors, int step) {
   Kept& k = kept_[key];
   k.step = step;
   k.tensors = tensors;
-  k.host.clear();
-  if (gpu_)
-    gpu_->save_snapshot(key, tensors);
-  else
-    for (int t : tensors) k.host.push_back(interpreter_->store().all(t));
+  backend_->save_snapshot(key, tensors);
 }
 
 void Simulation::restore(int key) {
   const auto it = kept_.find(key);
   if (it == kept_.end()) throw std::logic_error("Simulation: no checkpoint or kept step under this key");
   const Kept& k = it->second;
-  if (gpu_) {
-    if (!device_current_) gpu_->upload(interpreter_->store());  // the inputs
-    gpu_->load_snapshot(key, k.tensors);
-    device_current_ = true;
-    host_stale_ = true;
-  } else {
-    for (size_t i = 0; i < k.tensors.size(); ++i) interpreter_->store().all(k.tensors[i]) = k.host[i];
-  }
+  if (!device_current_) backend_->upload(interpreter_->store());  // the inputs
+  backend_->load_snapshot(key, k.tensors);
+  device_current_ = true;
+  host_stale_ = true;
   steps_ = k.step;
 }
 
 void Simulation::save_checkpoint(int key) {
-  if (gpu_ && !device_current_) {
-    gpu_->upload(interpreter_->store());
+  if (!device_current_) {
+    backend_->upload(interpreter_->store());
     device_current_ = true;
   }
   keep(key, state_tensors(), steps_);
@@ -268,23 +256,18 @@ void Simulation::load_step(int key) { restore(key); }
 
 void Simulation::drop_checkpoint(int key) {
   kept_.erase(key);
-  if (gpu_) gpu_->drop_snapshot(key);
+  backend_->drop_snapshot(key);
 }
 
 void Simulation::clear_checkpoints() {
-  if (gpu_)
-    for (const auto& [key, k] : kept_) gpu_->drop_snapshot(key);
+  for (const auto& [key, k] : kept_) backend_->drop_snapshot(key);
   kept_.clear();
 }
 
 void Simulation::recompute_step() {
-  if (gpu_) {
-    if (!device_current_) gpu_->upload(interpreter_->store());
-    device_current_ = true;
-    gpu_->run();
-  } else {
-    interpreter_->run();
-  }
+  if (!device_current_) backend_->upload(interpreter_->store());
+  device_current_ = true;
+  backend_->run();
 }
 
 Simulation::State Simulation::state(int b) const {

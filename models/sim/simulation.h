@@ -26,6 +26,7 @@ struct PhysicalParameters {
 };
 
 class GpuTimestep;
+class StepBackend;
 
 class Simulation {
  public:
@@ -37,7 +38,9 @@ class Simulation {
   // a usable GPU.
   void use_gpu(const std::string& real = "double");
   bool on_gpu() const { return gpu_ != nullptr; }
-  GpuTimestep* gpu() { return gpu_.get(); }
+  GpuTimestep* gpu() { return gpu_; }
+  // Where the steps run (runtime/step_backend.h): the interpreter or the GPU.
+  StepBackend& backend() { return *backend_; }
 
   int batch() const { return interpreter_->batch(); }
   void set_parameters(int b, const PhysicalParameters& p);
@@ -45,9 +48,10 @@ class Simulation {
   // Rest state with the initial velocity; called by the constructor and set_parameters.
   void reset();
   // Advances every batch item by one step; SimulationError names the step on failure.
-  // On the GPU, step(false) leaves the new state on the device alone: sync_host() copies it
-  // back and checks it (an exploding simulation is reported there); until then the state
-  // accessors below (displacement() and all built on it) throw std::logic_error.
+  // step(false) leaves the new state where the steps run (the device on the GPU):
+  // sync_host() copies it back and checks it (an exploding simulation is reported there);
+  // until then the state accessors below (displacement() and all built on it) throw
+  // std::logic_error.
   void step(bool to_host = true);
   void sync_host();
   // step(false) that also keeps what the step read and computed (its states and
@@ -126,17 +130,17 @@ class Simulation {
   const SimGrid& grid_;
   TimestepGraph graph_;
   std::unique_ptr<Interpreter<double>> interpreter_;
-  std::unique_ptr<GpuTimestep> gpu_;
-  std::vector<int> gpu_cg_iterations_;
-  // The GPU holds the host's inputs and state (set by a step, cleared by any host change):
-  // a step then starts from the device's copy, without an upload.
+  std::unique_ptr<StepBackend> backend_;  // an InterpreterBackend, or the GpuTimestep
+  GpuTimestep* gpu_ = nullptr;            // backend_ when it is the GPU
+  // The backend holds the host's inputs and state (set by a step, cleared by any host
+  // change): a step then starts from the backend's copy, without an upload.
   bool device_current_ = false;
-  // The device holds a newer state than the host (step(false), load_checkpoint).
+  // The backend holds a newer state than the host (step(false), load_checkpoint); for the
+  // interpreter the two are one store, so only the checks wait for sync_host().
   bool host_stale_ = false;
   struct Kept {
     int step = 0;
     std::vector<int> tensors;
-    std::vector<std::vector<double>> host;  // the tensors' values on the CPU path
   };
   std::map<int, Kept> kept_;  // checkpoints and kept steps by key
   std::vector<PhysicalParameters> params_;
