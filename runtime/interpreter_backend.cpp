@@ -32,7 +32,9 @@ size_t InterpreterBackend::free_device_memory() const {
 }
 
 void InterpreterBackend::get_adjoint(int tensor, std::vector<double>& all_items) const {
-  all_items = const_cast<Interpreter<double>&>(in_).adjoint().all(tensor);
+  const std::vector<double>& cotangent = const_cast<Interpreter<double>&>(in_).adjoint().all(tensor);
+  if (all_items.size() != cotangent.size()) throw std::logic_error("InterpreterBackend: get_adjoint size mismatch");
+  all_items = cotangent;
 }
 
 void InterpreterBackend::chain_adjoints(const std::vector<std::pair<int, int>>& from_to) {

@@ -38,8 +38,9 @@ class StepBackend {
 
   // Reverse mode on the values of the last step run or loaded: clear_adjoints(true) zeroes every
   // cotangent, clear_adjoints(false) all but the inputs' (parameter cotangents accumulate);
-  // set/get move one tensor's cotangent (all items); chain_adjoints moves each (from, to) and
-  // clears every other non-input cotangent (the next, earlier step of a backward pass).
+  // set/get move one tensor's cotangent (all items; get's vector has the tensor's size);
+  // chain_adjoints moves each (from, to) and clears every other non-input cotangent (the
+  // next, earlier step of a backward pass).
   virtual void clear_adjoints(bool including_inputs) = 0;
   virtual void set_adjoint(int tensor, const std::vector<double>& all_items) = 0;
   virtual void get_adjoint(int tensor, std::vector<double>& all_items) const = 0;

@@ -140,7 +140,7 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
     else
       backend.chain_adjoints({{tg.u_prev, tg.u}, {tg.v_prev, tg.v}});
     if (seeds[0].count(t)) {
-      std::vector<double> ub, bb(B * b3, 0.0);
+      std::vector<double> ub(B * n3), bb(B * b3, 0.0);
       backend.get_adjoint(tg.u, ub);
       for (int b = 0; b < B; ++b) {
         const FrameSeed& s = seeds[b].at(t);
