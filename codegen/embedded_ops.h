@@ -1,4 +1,5 @@
-// The text of the op headers (ops/*.h), embedded into the library at build time by
+// The text of the op headers (ops/*.h) and the kernels' device helpers (codegen/*.cuh),
+// embedded into the library at build time by
 // codegen/embed_headers.cmake, so that generated kernels compile exactly the op bodies
 // the CPU interpreter runs, with no source tree at run time.
 #pragma once

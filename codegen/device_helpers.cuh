@@ -1,0 +1,135 @@
+// Device helpers of the generated kernels: row-major 3x3 matrix access, the contact planes
+// layout, fixed-order block and grid reductions, warp shuffles and the grid barrier of the
+// persistent solves. Not compiled on its own: codegen/cuda_source.cpp pastes it (embedded at
+// build time like ops/, codegen/embed_headers.cmake) into every kernel's prelude after the ops
+// and the Real typedef, and NVRTC compiles it there (every kernel is compiled by the tests).
+#pragma once
+#include "ops/contact.h"
+#include "ops/ssc_math.h"
+namespace ssc {
+namespace gen {
+// Row-major 3x3 matrices stored as 9 consecutive Reals per cell (runtime/cpu_kernels.h).
+template <class R>
+__device__ inline Mat3<R> load_mat3(const R* r, int cell) {
+  Mat3<R> m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) m.m[i][j] = r[9 * cell + 3 * i + j];
+  return m;
+}
+template <class R>
+__device__ inline void store_mat3(R* r, int cell, const Mat3<R>& m) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r[9 * cell + 3 * i + j] = m.m[i][j];
+}
+template <class R>
+__device__ inline void add_mat3(R* r, int cell, const Mat3<R>& m) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r[9 * cell + 3 * i + j] += m.m[i][j];
+}
+// Ground planes: 6 values each (normal, height, stiffness, soft-min alpha).
+template <class R>
+__device__ inline int load_planes(const R* q, int n, ops::GroundPlane<R>* planes) {
+  if (n > ops::kMaxGroundPlanes) n = ops::kMaxGroundPlanes;
+  for (int p = 0; p < n; ++p) {
+    const R* x = q + 6 * p;
+    planes[p].normal = make_vec3(x[0], x[1], x[2]);
+    planes[p].height = x[3];
+    planes[p].stiffness = x[4];
+    planes[p].alpha = x[5];
+  }
+  return n;
+}
+// Sums N doubles over the Threads threads of a block in a fixed order: each warp by a
+// shuffle tree, then the warp sums (in warp order) by a shuffle tree in warp 0. Every
+// thread returns with the totals. All threads of the block must call it (it has barriers).
+template <int N, int Threads = SSC_ITEM>
+__device__ inline void block_sum(double (&v)[N]) {
+  constexpr int kWarps = Threads / 32;
+  __shared__ double part[N][kWarps];
+  __shared__ double total[N];
+  const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
+#pragma unroll
+  for (int k = 0; k < N; ++k)
+    for (int o = 16; o > 0; o >>= 1) v[k] += __shfl_down_sync(0xffffffffu, v[k], o);
+  if (lane == 0)
+    for (int k = 0; k < N; ++k) part[k][warp] = v[k];
+  __syncthreads();
+  if (warp == 0) {
+#pragma unroll
+    for (int k = 0; k < N; ++k) {
+      double s = lane < kWarps ? part[k][lane] : 0.0;
+      for (int o = 16; o > 0; o >>= 1) s += __shfl_down_sync(0xffffffffu, s, o);
+      if (lane == 0) total[k] = s;
+    }
+  }
+  __syncthreads();
+#pragma unroll
+  for (int k = 0; k < N; ++k) v[k] = total[k];
+  __syncthreads();  // part/total may be reused by the next call
+}
+
+// A vector from lane (this lane ^ mask) of the warp (all 32 lanes must take part).
+template <class R>
+__device__ inline Vec3<R> shfl_xor3(Vec3<R> v, int mask) {
+  return make_vec3(__shfl_xor_sync(0xffffffffu, v.x, mask), __shfl_xor_sync(0xffffffffu, v.y, mask),
+                   __shfl_xor_sync(0xffffffffu, v.z, mask));
+}
+
+// Extent::Grid: the threads of one batch item are gridDim.x blocks of SSC_GRID threads.
+__device__ inline int grid_rank() { return blockIdx.x * SSC_GRID + threadIdx.x; }
+__device__ inline int grid_threads() { return gridDim.x * SSC_GRID; }
+
+__device__ inline unsigned long long load_acquire(const unsigned long long* p) {
+  unsigned long long v;
+  asm volatile("ld.acquire.gpu.global.u64 %0, [%1];" : "=l"(v) : "l"(p) : "memory");
+  return v;
+}
+__device__ inline unsigned long long add_release(unsigned long long* p, unsigned long long v) {
+  unsigned long long old;
+  asm volatile("atom.release.gpu.global.add.u64 %0, [%1], %2;" : "=l"(old) : "l"(p), "l"(v) : "memory");
+  return old;
+}
+
+// Barrier of the gridDim.x blocks of one batch item (all resident: cooperative launch).
+// *bar counts arrivals and only grows: the barrier a block arrives at is complete when
+// the count reaches the next multiple of gridDim.x (the same for every launch of one
+// kernel over one problem, so the counter stays valid from launch to launch). Writes
+// before the barrier (any block) are visible after it: release on arrival, acquire on
+// leaving. One atomic and the polls per block.
+__device__ inline void grid_sync(unsigned long long* bar) {
+  __syncthreads();
+  if (threadIdx.x == 0) {
+    const unsigned long long blocks = gridDim.x;
+    const unsigned long long target = (add_release(bar, 1ull) / blocks + 1) * blocks;
+    while (load_acquire(bar) < target) {
+    }
+  }
+  __syncthreads();
+}
+
+// Sums N doubles over all threads of one batch item in a fixed order (block trees, then
+// the block totals in block order by warp 0 of every block): every thread of every block
+// returns with the same bits. partial holds N * gridDim.x doubles; consecutive calls must
+// use different partial buffers unless a grid_sync separates them. Includes a grid_sync.
+template <int N>
+__device__ inline void grid_sum(double (&v)[N], double* partial, unsigned long long* bar) {
+  block_sum<N, SSC_GRID>(v);
+  if (threadIdx.x == 0)
+    for (int k = 0; k < N; ++k) partial[N * blockIdx.x + k] = v[k];
+  grid_sync(bar);
+  __shared__ double total[N];
+  if (threadIdx.x < 32) {
+    const int lane = threadIdx.x;
+    for (int k = 0; k < N; ++k) {
+      double s = 0;
+      for (int j = lane; j < int(gridDim.x); j += 32) s += __ldcg(partial + N * j + k);
+      for (int o = 16; o > 0; o >>= 1) s += __shfl_down_sync(0xffffffffu, s, o);
+      if (lane == 0) total[k] = s;
+    }
+  }
+  __syncthreads();
+  for (int k = 0; k < N; ++k) v[k] = total[k];
+  __syncthreads();
+}
+}  // namespace gen
+}  // namespace ssc
