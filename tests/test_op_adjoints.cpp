@@ -22,6 +22,8 @@
 // The measured errors are printed (a table per op); the report quotes them.
 #include <gtest/gtest.h>
 
+#include <fmt/format.h>
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -205,6 +207,35 @@ struct Tolerances {
   double dot = 1e-12, fd = 1e-6, value = 1e-15, accumulate = 1e-14;
 };
 
+// Every checked part with its worst errors and limits, printed as one table when the test
+// binary ends (`build/bin/ssc_tests --gtest_filter='OpAdjoint*'` prints the op check table).
+struct CheckRow {
+  std::string part;
+  Metrics worst;
+  Tolerances limit;
+  bool passed;
+};
+std::vector<CheckRow>& check_rows() {
+  static std::vector<CheckRow> rows;
+  return rows;
+}
+
+class CheckTable : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    if (check_rows().empty()) return;
+    std::printf("\nop check table: worst over the seeds (limit), double\n");
+    std::printf("%-36s %-20s %-20s %-20s %-20s %s\n", "part", "dot-product", "FD vs JVP", "FD vs VJP", "accumulate", "");
+    for (const CheckRow& r : check_rows()) {
+      auto cell = [](double v, double lim) { return fmt::format("{:.1e} ({:.0e})", v, lim); };
+      std::printf("%-36s %-20s %-20s %-20s %-20s %s\n", r.part.c_str(), cell(r.worst.dot, r.limit.dot).c_str(),
+                  cell(r.worst.fd, r.limit.fd).c_str(), cell(r.worst.fd_vjp, r.limit.fd).c_str(),
+                  cell(r.worst.accumulate, r.limit.accumulate).c_str(), r.passed ? "ok" : "FAILED");
+    }
+  }
+};
+const ::testing::Environment* const kCheckTable = ::testing::AddGlobalTestEnvironment(new CheckTable);
+
 // Runs `make(rng, seed)` for `seeds` seeds, checks each case, prints the worst errors.
 template <class Make>
 Metrics run_cases(const std::string& name, int seeds, Make make, const Tolerances& tol = {}) {
@@ -226,6 +257,9 @@ Metrics run_cases(const std::string& name, int seeds, Make make, const Tolerance
   }
   std::printf("%-34s %d seeds: dot-product %.2e  FD vs JVP %.2e  FD vs VJP %.2e  (Dual value %.1e, accumulate %.1e)\n",
               name.c_str(), seeds, worst.dot, worst.fd, worst.fd_vjp, worst.value, worst.accumulate);
+  check_rows().push_back({name, worst, tol,
+                          worst.dot <= tol.dot && worst.fd <= tol.fd && worst.fd_vjp <= tol.fd &&
+                              worst.value <= tol.value && worst.accumulate <= tol.accumulate});
   ::testing::Test::RecordProperty(name + "_dot", std::to_string(worst.dot));
   ::testing::Test::RecordProperty(name + "_fd", std::to_string(worst.fd));
   return worst;
