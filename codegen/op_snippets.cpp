@@ -41,16 +41,10 @@ namespace {
 
 using namespace snippet;
 
-// A contact test point: the ground planes, its edge nodes, its position and velocity
-// interpolated along the edge (forward and adjoint of ContactForce share it).
-const char* const kContactPoint =
+// The contact planes of the item (forward and adjoint of ContactForce share them).
+const char* const kContactPlanes =
     "ops::GroundPlane<Real> planes[ops::kMaxGroundPlanes];\n"
-    "const int plane_count = gen::load_planes($ground_planes, n_plane, planes);\n"
-    "const int na = g_point_nodes[2 * i], nb = g_point_nodes[2 * i + 1];\n"
-    "const Real t = g_point_t[i];\n"
-    "const Vec3<Real> xa = load3(g_node_rest, na), xb = load3(g_node_rest, nb);\n"
-    "const Vec3<Real> x = (Real(1) - t) * (xa + load3($u_prev, na)) + t * (xb + load3($u_prev, nb));\n"
-    "const Vec3<Real> vel = (Real(1) - t) * load3($v_prev, na) + t * load3($v_prev, nb);\n";
+    "const int plane_count = gen::load_planes($ground_planes, n_plane, planes);\n";
 
 std::string opname(int op) { return "op" + std::to_string(op); }
 
@@ -90,8 +84,9 @@ Snippet forward_snippet(const Graph& g, int op) {
       return Builder(g, op, "contact_force", Extent::Point)
           .t("u_prev", false, true).t("v_prev", false, true).t("ground_planes").t("dt").t("theta").t("point_force", true)
           .grid("point_nodes", "int").grid("point_t", "Real").grid("point_area", "Real").grid("node_rest", "Real", true)
-          .code(std::string(kContactPoint) +
-                "store3($point_force, i, ops::contact_force(x, vel, g_point_area[i], planes, plane_count, $dt[0], $theta[0]));\n");
+          .code(std::string(kContactPlanes) +
+                "store3($point_force, i, ops::contact_point_force(i, g_point_nodes, g_point_t, g_point_area, g_node_rest, "
+                "$u_prev, $v_prev, planes, plane_count, $dt[0], $theta[0]));\n");
     case OpKind::NodeForce: {
       Builder b(g, op, "node_force", Extent::Node);
       b.t("corner_force", false, true).t("mass").t("gravity").t("force", true);
@@ -211,13 +206,13 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
                       .scratch("xbar", "xbar_" + n, "Real", Domain::Point, 3, true)
                       .scratch("vbar", "vbar_" + n, "Real", Domain::Point, 3, true)
                       .scratch("pbar", "planebar_" + n, "Real", Domain::Point, kMaxPlaneBars, true)
-                      .code(std::string(kContactPoint) +
+                      .code(std::string(kContactPlanes) +
                             "Vec3<Real> xb_ = zero3<Real>(), vb_ = zero3<Real>();\n"
                             "Vec3<Real> nbar[ops::kMaxGroundPlanes];\n"
                             "Real hbar[ops::kMaxGroundPlanes];\n"
                             "for (int k = 0; k < plane_count; ++k) { nbar[k] = zero3<Real>(); hbar[k] = Real(0); }\n"
-                            "ops::adj_contact_force(x, vel, g_point_area[i], planes, plane_count, $dt[0], $theta[0], "
-                            "load3($d_point_force, i), xb_, vb_, nbar, hbar);\n"
+                            "ops::adj_contact_point_force(i, g_point_nodes, g_point_t, g_point_area, g_node_rest, $u_prev, "
+                            "$v_prev, planes, plane_count, $dt[0], $theta[0], load3($d_point_force, i), xb_, vb_, nbar, hbar);\n"
                             "store3($xbar, i, xb_);\n"
                             "store3($vbar, i, vb_);\n"
                             "for (int k = 0; k < plane_count; ++k) {\n"

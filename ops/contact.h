@@ -86,5 +86,41 @@ SSC_HD inline void adj_contact_force(Vec3<Real> x, Vec3<Real> v, Real area, cons
   }
 }
 
+// ---- the per-index parts of the contact op: one contact point each, called alike by the
+// interpreter (runtime/) and the generated kernels (codegen/) ----
+
+// Contact point i sits at (1 - t, t) between the active nodes point_nodes[2i], [2i + 1] of
+// an edge: its position (rest + displacement) and velocity.
+template <class Real>
+SSC_HD inline void contact_point_state(int i, const int* point_nodes, const Real* point_t, const Real* node_rest,
+                                       const Real* u, const Real* v, Vec3<Real>& x, Vec3<Real>& vel) {
+  const int na = point_nodes[2 * i], nb = point_nodes[2 * i + 1];
+  const Real t = point_t[i];
+  x = (Real(1) - t) * (load3(node_rest, na) + load3(u, na)) + t * (load3(node_rest, nb) + load3(u, nb));
+  vel = (Real(1) - t) * load3(v, na) + t * load3(v, nb);
+}
+
+template <class Real>
+SSC_HD inline Vec3<Real> contact_point_force(int i, const int* point_nodes, const Real* point_t, const Real* point_area,
+                                             const Real* node_rest, const Real* u_prev, const Real* v_prev,
+                                             const GroundPlane<Real>* planes, int plane_count, Real dt, Real theta) {
+  Vec3<Real> x, vel;
+  contact_point_state(i, point_nodes, point_t, node_rest, u_prev, v_prev, x, vel);
+  return contact_force(x, vel, point_area[i], planes, plane_count, dt, theta);
+}
+
+// The point's position and velocity cotangents (the engine's gather takes them to the edge's
+// nodes) and the planes'.
+template <class Real>
+SSC_HD inline void adj_contact_point_force(int i, const int* point_nodes, const Real* point_t, const Real* point_area,
+                                           const Real* node_rest, const Real* u_prev, const Real* v_prev,
+                                           const GroundPlane<Real>* planes, int plane_count, Real dt, Real theta,
+                                           Vec3<Real> f_bar, Vec3<Real>& x_bar, Vec3<Real>& v_bar, Vec3<Real>* normal_bar,
+                                           Real* height_bar) {
+  Vec3<Real> x, vel;
+  contact_point_state(i, point_nodes, point_t, node_rest, u_prev, v_prev, x, vel);
+  adj_contact_force(x, vel, point_area[i], planes, plane_count, dt, theta, f_bar, x_bar, v_bar, normal_bar, height_bar);
+}
+
 }  // namespace ops
 }  // namespace ssc

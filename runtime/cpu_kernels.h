@@ -54,16 +54,6 @@ inline int load_ground_planes(const TensorStore<Real>& store, const OpNode& op, 
   return count;
 }
 
-// Position and velocity of contact point p: (1 - t, t) between its edge's two nodes.
-template <class Real>
-inline void contact_point_state(const StaticArrays& g, const Real* node_rest, const Real* point_t, const Real* u, const Real* v,
-                                int p, Vec3<Real>& x, Vec3<Real>& vel) {
-  const ContactPoint& cp = g.contact_points[p];
-  const Real t = point_t[p];
-  x = (Real(1) - t) * (load3(node_rest, cp.node_a) + load3(u, cp.node_a)) + t * (load3(node_rest, cp.node_b) + load3(u, cp.node_b));
-  vel = (Real(1) - t) * load3(v, cp.node_a) + t * load3(v, cp.node_b);
-}
-
 // Per-corner K p for every cell (the matrix-free stiffness product).
 template <class Real>
 inline void stiffness_apply_cells(const StaticArrays& g, const Real* rotation, const Real* weights, Real lambda, Real mu,

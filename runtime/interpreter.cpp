@@ -42,7 +42,12 @@ Interpreter<Real>::Interpreter(const Graph& graph, const StaticArrays& grid, int
       store_(graph, domain_sizes(grid), batch),
       adjoint_(graph, domain_sizes(grid), batch) {
   graph_.validate();
-  for (const ContactPoint& p : grid.contact_points) point_t_.push_back(Real(p.t));
+  for (const ContactPoint& p : grid.contact_points) {
+    point_t_.push_back(Real(p.t));
+    point_area_.push_back(Real(p.area));
+    point_nodes_.push_back(p.node_a);
+    point_nodes_.push_back(p.node_b);
+  }
   weights_ = real_copy<Real>(grid.cell_volume_weights);
   node_rest_ = real_copy<Real>(grid.node_rest);
   extension_adjoint_guess_.assign(batch, {});
@@ -137,11 +142,9 @@ void Interpreter<Real>::execute_item(const OpNode& op, int b) {
       Real* f = a.out("point_force");
       const int n = int(g.contact_points.size());
 #pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
-      for (int p = 0; p < n; ++p) {
-        Vec3<Real> x, vel;
-        contact_point_state(g, node_rest_.data(), point_t_.data(), u, v, p, x, vel);
-        store3(f, p, ops::contact_force(x, vel, Real(g.contact_points[p].area), planes, plane_count, dt, theta));
-      }
+      for (int p = 0; p < n; ++p)
+        store3(f, p, ops::contact_point_force(p, point_nodes_.data(), point_t_.data(), point_area_.data(), node_rest_.data(),
+                                              u, v, planes, plane_count, dt, theta));
       break;
     }
     case OpKind::NodeForce: {

@@ -70,6 +70,8 @@ class Interpreter {
   TensorStore<Real> adjoint_;
   RunReport report_;
   std::vector<Real> point_t_;  // contact point edge parameters, in Real
+  std::vector<Real> point_area_;   // contact point surface shares, in Real
+  std::vector<int> point_nodes_;   // contact point edge nodes, 2 per point
   std::vector<Real> weights_;    // cut-cell volume weights, in Real
   std::vector<Real> node_rest_;  // rest positions of the active nodes, in Real
   std::vector<std::vector<Real>> extension_adjoint_guess_;  // per batch item, warm start

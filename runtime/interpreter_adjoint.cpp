@@ -126,8 +126,6 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       std::vector<Real> x_bar(3 * size_t(n)), v_bar(3 * size_t(n)), plane_bar(4 * size_t(n) * plane_count);
 #pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
       for (int p = 0; p < n; ++p) {
-        Vec3<Real> x, vel;
-        contact_point_state(g, node_rest_.data(), point_t_.data(), u, v, p, x, vel);
         Vec3<Real> xb_ = zero3<Real>(), vb_ = zero3<Real>();
         Vec3<Real> nb[ops::kMaxGroundPlanes];
         Real hb[ops::kMaxGroundPlanes];
@@ -135,7 +133,8 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
           nb[k] = zero3<Real>();
           hb[k] = Real(0);
         }
-        ops::adj_contact_force(x, vel, Real(g.contact_points[p].area), planes, plane_count, dt, theta, load3(f_bar, p), xb_, vb_, nb, hb);
+        ops::adj_contact_point_force(p, point_nodes_.data(), point_t_.data(), point_area_.data(), node_rest_.data(), u, v,
+                                     planes, plane_count, dt, theta, load3(f_bar, p), xb_, vb_, nb, hb);
         store3(x_bar.data(), p, xb_);
         store3(v_bar.data(), p, vb_);
         for (int k = 0; k < plane_count; ++k) {
