@@ -12,6 +12,7 @@
 #include "expect_input_error.h"
 #include "models/io/output_dir.h"
 #include "models/io/run_record.h"
+#include "models/optim/reconstruction.h"
 #include "models/sim/body.h"
 #include "models/sim/deformed_surface.h"
 #include "models/sim/match_check.h"
@@ -378,6 +379,26 @@ TEST(MatchCheck, DepthWithTheFloorLeftInIsNotSilent) {
   bool warned = false;
   for (const Warning& w : warnings()) warned |= w.code == "unsegmented_depth";
   EXPECT_TRUE(refused || warned) << "the floor in the depth passed without a word";
+  // A fit keeps its best point's frames, which `reconstruct` checks the same way.
+  ReconstructionOptions ro;
+  ro.fit = {"youngs_modulus"};
+  ro.starts = 1;
+  ro.optimizer_options.max_iterations = 1;
+  const ReconstructionResult fit_result = reconstruct(problem, ro);
+  ASSERT_GE(fit_result.best, 0);
+  const StartRecord& best = fit_result.starts[fit_result.best];
+  ASSERT_EQ(best.frames.size(), problem.frames.size());
+  int matched = 0;
+  for (const FrameCost& f : best.frames) matched += f.matched;
+  EXPECT_EQ(matched, best.matched_points);
+  clear_warnings();
+  try {
+    check_matches(best.frames, box / "obs", "the best fit");
+  } catch (const InputError&) {
+  }
+  warned = refused;
+  for (const Warning& w : warnings()) warned |= w.code == "unsegmented_depth";
+  EXPECT_TRUE(warned);
   clear_warnings();
 }
 

@@ -194,8 +194,9 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
           o.finite_differences ? fd_gradient[k] : space.gradient_to_internal(opt[active[k]]->ask(), g);
       if (rec.initial_gradient_norm < 0) rec.initial_gradient_norm = internal_gradient.norm();
       if (values[k].cost < opt[active[k]]->best_cost()) {
+        rec.frames = values[k].frames;
         rec.matched_points = rec.observed_points = 0;
-        for (const FrameCost& f : values[k].frames) rec.matched_points += f.matched, rec.observed_points += f.points;
+        for (const FrameCost& f : rec.frames) rec.matched_points += f.matched, rec.observed_points += f.points;
         rec.final_gradient_norm = internal_gradient.norm();
       }
       opt[active[k]]->tell(values[k].cost, internal_gradient);

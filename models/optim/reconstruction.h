@@ -40,8 +40,10 @@ struct StartRecord {
   std::vector<Eigen::VectorXd> parameter_history;  // physical values per iteration
   int iterations = 0;
   std::string stop_reason;
-  // At the best point told (the final values): matched and observed points over all frames,
-  // the norm of the gradient in the optimiser's coordinates; and the norm at the start.
+  // At the best point told (the final values): each frame's matched and observed points and
+  // their totals, the norm of the gradient in the optimiser's coordinates; and the norm at
+  // the start.
+  std::vector<FrameCost> frames;
   int matched_points = 0, observed_points = 0;
   double final_gradient_norm = 0, initial_gradient_norm = -1;
   bool failed = false;

@@ -88,10 +88,7 @@ std::string failure_summary(const ReconstructionResult& r) {
 // a best start that never moved is worth a warning.
 void check_fit(const ReconstructionResult& r, const std::string& observations) {
   const StartRecord& best = r.starts[r.best];
-  std::vector<FrameCost> total(1);
-  total[0].points = best.observed_points;
-  total[0].matched = best.matched_points;
-  if (best.matched_points < kMinMatchedFraction * best.observed_points) check_matches(total, observations, "the best fit");
+  check_matches(best.frames, observations, "the best fit");
   bool all_zero = true;
   for (const StartRecord& s : r.starts) all_zero &= s.failed || s.initial_gradient_norm == 0;
   if (all_zero)
