@@ -1,31 +1,13 @@
-// Device helpers of the generated kernels: row-major 3x3 matrix access, the contact planes
-// layout, fixed-order block and grid reductions, warp shuffles and the grid barrier of the
-// persistent solves. Not compiled on its own: codegen/cuda_source.cpp pastes it (embedded at
+// Device helpers of the generated kernels: the contact planes' layout, fixed-order block
+// and grid reductions, warp shuffles and the grid barrier of the persistent solves. Not compiled on its own: codegen/cuda_source.cpp pastes it (embedded at
 // build time like ops/, codegen/embed_headers.cmake) into every kernel's prelude after the ops
 // and the Real typedef, and NVRTC compiles it there (every kernel is compiled by the tests).
 #pragma once
 #include "ops/contact.h"
+#include "ops/corotation.h"
 #include "ops/ssc_math.h"
 namespace ssc {
 namespace gen {
-// Row-major 3x3 matrices stored as 9 consecutive Reals per cell (runtime/cpu_kernels.h).
-template <class R>
-__device__ inline Mat3<R> load_mat3(const R* r, int cell) {
-  Mat3<R> m;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) m.m[i][j] = r[9 * cell + 3 * i + j];
-  return m;
-}
-template <class R>
-__device__ inline void store_mat3(R* r, int cell, const Mat3<R>& m) {
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r[9 * cell + 3 * i + j] = m.m[i][j];
-}
-template <class R>
-__device__ inline void add_mat3(R* r, int cell, const Mat3<R>& m) {
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r[9 * cell + 3 * i + j] += m.m[i][j];
-}
 // Ground planes: 6 values each (normal, height, stiffness, soft-min alpha).
 template <class R>
 __device__ inline int load_planes(const R* q, int n, ops::GroundPlane<R>* planes) {

@@ -68,18 +68,11 @@ Snippet forward_snippet(const Graph& g, int op) {
     case OpKind::Corotation:
       return Builder(g, op, "corotation", Extent::Cell)
           .t("u_prev", false, true).t("rotation", true).t("polar_status", true).grid("cell_nodes", "int")
-          .code("Vec3<Real> uc[8];\n"
-                "ops::load_cell_corners($u_prev, g_cell_nodes, i, uc);\n"
-                "Mat3<Real> R;\n"
-                "const int status = ops::polar_rotation(ops::cell_deformation_gradient(uc, h), R);\n"
-                "gen::store_mat3($rotation, i, R);\n"
-                "$polar_status[i] = Real(status);\n");
+          .code("ops::corotation_cell(i, $u_prev, g_cell_nodes, h, $rotation, $polar_status);\n");
     case OpKind::CorotationForce:
       return Builder(g, op, "corotation_force", Extent::Cell)
           .t("rotation").t("lambda").t("mu").t("corner_force", true).grid("cell_weights", "Real")
-          .code("Vec3<Real> fc[8];\n"
-                "ops::corotation_offset_force(gen::load_mat3($rotation, i), g_cell_weights + 8 * i, $lambda[0], $mu[0], h, fc);\n"
-                "for (int c = 0; c < 8; ++c) store3($corner_force, 8 * i + c, fc[c]);\n");
+          .code("ops::corotation_force_cell(i, $rotation, g_cell_weights, $lambda[0], $mu[0], h, $corner_force);\n");
     case OpKind::ContactForce:
       return Builder(g, op, "contact_force", Extent::Point)
           .t("u_prev", false, true).t("v_prev", false, true).t("ground_planes").t("dt").t("theta").t("point_force", true)
@@ -105,10 +98,8 @@ Snippet forward_snippet(const Graph& g, int op) {
       return Builder(g, op, "stiffness_apply", Extent::Cell)
           .t("rotation").t("lambda").t("mu").t("u_prev", false, true).t("ku_corner", true)
           .grid("cell_weights", "Real").grid("cell_nodes", "int")
-          .code("Vec3<Real> pc[8], y[8];\n"
-                "ops::load_cell_corners($u_prev, g_cell_nodes, i, pc);\n"
-                "ops::corotated_apply(gen::load_mat3($rotation, i), g_cell_weights + 8 * i, $lambda[0], $mu[0], h, pc, y);\n"
-                "for (int c = 0; c < 8; ++c) store3($ku_corner, 8 * i + c, y[c]);\n");
+          .code("ops::stiffness_apply_cell(i, $rotation, g_cell_weights, $lambda[0], $mu[0], h, $u_prev, g_cell_nodes, "
+                "$ku_corner);\n");
     case OpKind::NewmarkRhs: {
       Builder b(g, op, "newmark_rhs", Extent::Node);
       newmark_scalars(b).t("ku_corner", false, true).t("mass").t("u_prev").t("v_prev").t("force").t("rhs", true);
@@ -173,27 +164,17 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
       s.push_back(Builder(g, op, "corotation", Extent::Cell)
                       .t("u_prev", false, true).t("rotation").t("polar_status").a("rotation", false).grid("cell_nodes", "int")
                       .scratch("corner", "corner_" + n, "Real", Domain::Cell, 24, true)
-                      .code("Vec3<Real> uc[8], ub[8];\n"
-                            "ops::load_cell_corners($u_prev, g_cell_nodes, i, uc);\n"
-                            "for (int c = 0; c < 8; ++c) ub[c] = zero3<Real>();\n"
-                            "Mat3<Real> F_bar = zero33<Real>();\n"
-                            "ops::adj_polar_rotation(ops::cell_deformation_gradient(uc, h), gen::load_mat3($rotation, i), "
-                            "int($polar_status[i]), gen::load_mat3($d_rotation, i), F_bar);\n"
-                            "ops::adj_cell_deformation_gradient(F_bar, h, ub);\n"
-                            "for (int c = 0; c < 8; ++c) store3($corner, 8 * i + c, ub[c]);\n"));
+                      .code("ops::adj_corotation_cell(i, $u_prev, g_cell_nodes, h, $rotation, $polar_status, $d_rotation, "
+                            "$corner);\n"));
       s.push_back(corner_gather("corotation_gather", "u_prev"));
       break;
     case OpKind::CorotationForce:
       s.push_back(Builder(g, op, "corotation_force", Extent::Cell)
                       .t("rotation").t("lambda").t("mu").a("corner_force", false).a("rotation").grid("cell_weights", "Real")
                       .scratch("red", "red_" + n, "Real", Domain::Cell, 2, true)
-                      .code("Vec3<Real> fb[8];\n"
-                            "for (int c = 0; c < 8; ++c) fb[c] = load3($d_corner_force, 8 * i + c);\n"
-                            "Mat3<Real> R_bar = zero33<Real>();\n"
-                            "Real l = Real(0), m = Real(0);\n"
-                            "ops::adj_corotation_offset_force(gen::load_mat3($rotation, i), g_cell_weights + 8 * i, $lambda[0], "
-                            "$mu[0], h, fb, R_bar, l, m);\n"
-                            "gen::add_mat3($d_rotation, i, R_bar);\n"
+                      .code("Real l = Real(0), m = Real(0);\n"
+                            "ops::adj_corotation_force_cell(i, $rotation, g_cell_weights, $lambda[0], $mu[0], h, $d_corner_force, "
+                            "$d_rotation, l, m);\n"
                             "$red[2 * i] = l;\n"
                             "$red[2 * i + 1] = m;\n"));
       s.push_back(lame_reduce("corotation_force_reduce"));
@@ -268,15 +249,9 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
                       .grid("cell_weights", "Real").grid("cell_nodes", "int")
                       .scratch("corner", "corner_" + n, "Real", Domain::Cell, 24, true)
                       .scratch("red", "red_" + n, "Real", Domain::Cell, 2, true)
-                      .code("Vec3<Real> pc[8], yb[8], pb[8];\n"
-                            "ops::load_cell_corners($u_prev, g_cell_nodes, i, pc);\n"
-                            "for (int c = 0; c < 8; ++c) { yb[c] = load3($d_ku_corner, 8 * i + c); pb[c] = zero3<Real>(); }\n"
-                            "Mat3<Real> R_bar = zero33<Real>();\n"
-                            "Real l = Real(0), m = Real(0);\n"
-                            "ops::adj_corotated_apply(gen::load_mat3($rotation, i), g_cell_weights + 8 * i, $lambda[0], $mu[0], h, "
-                            "pc, yb, R_bar, l, m, pb);\n"
-                            "gen::add_mat3($d_rotation, i, R_bar);\n"
-                            "for (int c = 0; c < 8; ++c) store3($corner, 8 * i + c, pb[c]);\n"
+                      .code("Real l = Real(0), m = Real(0);\n"
+                            "ops::adj_stiffness_apply_cell(i, $rotation, g_cell_weights, $lambda[0], $mu[0], h, $u_prev, "
+                            "g_cell_nodes, $d_ku_corner, $d_rotation, $corner, l, m);\n"
                             "$red[2 * i] = l;\n"
                             "$red[2 * i + 1] = m;\n"));
       s.push_back(corner_gather("stiffness_apply_gather", "u_prev"));
@@ -324,11 +299,11 @@ std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
                             "Vec3<Real> pc[8], yb[8], pb[8], y[8];\n"
                             "ops::load_cell_corners($u, g_cell_nodes, i, pc);\n"
                             "for (int k = 0; k < 8; ++k) { yb[k] = (-c.a_k) * load3($w, g_cell_nodes[8 * i + k]); pb[k] = zero3<Real>(); }\n"
-                            "const Mat3<Real> R = gen::load_mat3($rotation, i);\n"
+                            "const Mat3<Real> R = ops::load_mat3($rotation, i);\n"
                             "Mat3<Real> R_bar = zero33<Real>();\n"
                             "Real l = Real(0), mm = Real(0);\n"
                             "ops::adj_corotated_apply(R, g_cell_weights + 8 * i, $lambda[0], $mu[0], h, pc, yb, R_bar, l, mm, pb);\n"
-                            "gen::add_mat3($d_rotation, i, R_bar);\n"
+                            "ops::add_mat3($d_rotation, i, R_bar);\n"
                             "ops::corotated_apply(R, g_cell_weights + 8 * i, $lambda[0], $mu[0], h, pc, y);\n"
                             "for (int k = 0; k < 8; ++k) store3($ku, 8 * i + k, y[k]);\n"
                             "$red[2 * i] = l;\n"

@@ -302,7 +302,7 @@ Snippet newmark_grid_loop(const Graph& g, int op) {
       "    const bool valid = t < lanes;\n"
       "    const int e = valid ? t >> 3 : 0, c = t & 7;\n"
       "    const int nd = !valid ? 0 : t == rank ? corner_node : g_cell_nodes[t];\n"
-      "    const Mat3<Real> R = gen::load_mat3($rotation, e);\n"
+      "    const Mat3<Real> R = ops::load_mat3($rotation, e);\n"
       "    const Vec3<Real> q = mul_transposed(R, value(source, nd));\n"
       "    const Vec3<Real> qn[3] = {gen::shfl_xor3(q, 1), gen::shfl_xor3(q, 2), gen::shfl_xor3(q, 4)};\n"
       "    Vec3<Real> col[3];\n"
@@ -455,7 +455,7 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
     b.scratch("corner", "corner", "Real", Domain::Cell, 24, true).stage("Jacobi diagonal, one thread per cell corner", true);
     s.push_back(b.code(
         "const int cell = i >> 3;\n"
-        "store3($corner, i, ops::corotated_diagonal_corner(gen::load_mat3($rotation, cell), g_cell_weights + 8 * cell, "
+        "store3($corner, i, ops::corotated_diagonal_corner(ops::load_mat3($rotation, cell), g_cell_weights + 8 * cell, "
         "$lambda[0], $mu[0], h, i & 7));\n"));
   }
   {
@@ -484,7 +484,7 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
         "if (gate != 0 && $cg[6] == 0.0) return;  // solve stopped for this item\n"
         "Vec3<Real> pc[8], y[8];\n"
         "ops::load_cell_corners(v_p, g_cell_nodes, i, pc);\n"
-        "ops::corotated_apply(gen::load_mat3($rotation, i), g_cell_weights + 8 * i, $lambda[0], $mu[0], h, pc, y);\n"
+        "ops::corotated_apply(ops::load_mat3($rotation, i), g_cell_weights + 8 * i, $lambda[0], $mu[0], h, pc, y);\n"
         "for (int k = 0; k < 8; ++k) store3($corner, 8 * i + k, y[k]);\n"));
   }
   {

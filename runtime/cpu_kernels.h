@@ -7,6 +7,7 @@
 #include "graph/graph.h"
 #include "runtime/static_arrays.h"
 #include "ops/contact.h"
+#include "ops/corotation.h"
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/newmark.h"
@@ -30,20 +31,6 @@ struct Binder {
   }
 };
 
-template <class Real>
-inline Mat3<Real> load_rotation(const Real* r, int cell) {
-  Mat3<Real> R;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) R.m[i][j] = r[9 * cell + 3 * i + j];
-  return R;
-}
-
-template <class Real>
-inline void add_rotation(Real* r, int cell, const Mat3<Real>& R) {
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r[9 * cell + 3 * i + j] += R.m[i][j];
-}
-
 // The ground planes packed 6 per plane (normal, height, stiffness, alpha); returns the count.
 template <class Real>
 inline int load_ground_planes(const TensorStore<Real>& store, const OpNode& op, int b, ops::GroundPlane<Real>* planes) {
@@ -60,12 +47,7 @@ inline void stiffness_apply_cells(const StaticArrays& g, const Real* rotation, c
                                   const Real* p, Real* corner_out) {
   const Real h = Real(g.h);
 #pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
-  for (int e = 0; e < g.cell_count; ++e) {
-    Vec3<Real> pc[8], y[8];
-    ops::load_cell_corners(p, g.cell_nodes.data(), e, pc);
-    ops::corotated_apply(load_rotation(rotation, e), weights + 8 * e, lambda, mu, h, pc, y);
-    for (int c = 0; c < 8; ++c) store3(corner_out, 8 * e + c, y[c]);
-  }
+  for (int e = 0; e < g.cell_count; ++e) ops::stiffness_apply_cell(e, rotation, weights, lambda, mu, h, p, g.cell_nodes.data(), corner_out);
 }
 
 // Node sums of per-corner vectors: out[i] (+)= sum over the corners touching node i.
@@ -111,7 +93,7 @@ struct NewmarkSystem {
 #pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
     for (int e = 0; e < g.cell_count; ++e) {
       Vec3<Real> d[8];
-      ops::corotated_diagonal(load_rotation(rotation, e), weights.data() + 8 * e, lambda, mu, h, d);
+      ops::corotated_diagonal(ops::load_mat3(rotation, e), weights.data() + 8 * e, lambda, mu, h, d);
       for (int k = 0; k < 8; ++k) store3(corner.data(), 8 * e + k, d[k]);
     }
     for (int i = 0; i < g.node_count; ++i) {

@@ -9,6 +9,7 @@
 
 #include "runtime/errors.h"
 #include "ops/contact.h"
+#include "ops/corotation.h"
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/newmark.h"
@@ -108,16 +109,8 @@ void Interpreter<Real>::execute_item(const OpNode& op, int b) {
       Real* status = a.out("polar_status");
       int degenerate = 0;
 #pragma omp parallel for schedule(static) reduction(+ : degenerate) if (g.cell_count >= kCellParallelThreshold)
-      for (int e = 0; e < g.cell_count; ++e) {
-        Vec3<Real> uc[8];
-        ops::load_cell_corners(u, g.cell_nodes.data(), e, uc);
-        Mat3<Real> R;
-        const int s = ops::polar_rotation(ops::cell_deformation_gradient(uc, h), R);
-        for (int i = 0; i < 3; ++i)
-          for (int j = 0; j < 3; ++j) rot[9 * e + 3 * i + j] = R.m[i][j];
-        status[e] = Real(s);
-        degenerate += s == ops::kPolarDegenerate;
-      }
+      for (int e = 0; e < g.cell_count; ++e)
+        degenerate += ops::corotation_cell(e, u, g.cell_nodes.data(), h, rot, status) == ops::kPolarDegenerate;
       report_.degenerate_cells[b] = degenerate;
       break;
     }
@@ -126,11 +119,7 @@ void Interpreter<Real>::execute_item(const OpNode& op, int b) {
       const Real lambda = a.scalar("lambda"), mu = a.scalar("mu");
       Real* f = a.out("corner_force");
 #pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
-      for (int e = 0; e < g.cell_count; ++e) {
-        Vec3<Real> fc[8];
-        ops::corotation_offset_force(load_rotation(rot, e), weights.data() + 8 * e, lambda, mu, h, fc);
-        for (int c = 0; c < 8; ++c) store3(f, 8 * e + c, fc[c]);
-      }
+      for (int e = 0; e < g.cell_count; ++e) ops::corotation_force_cell(e, rot, weights.data(), lambda, mu, h, f);
       break;
     }
     case OpKind::ContactForce: {

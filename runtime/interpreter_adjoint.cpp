@@ -6,6 +6,7 @@
 
 #include "runtime/errors.h"
 #include "ops/contact.h"
+#include "ops/corotation.h"
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/newmark.h"
@@ -82,16 +83,8 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       const Real* rot_bar = d.out("rotation");
       std::vector<Real> corner(corner_size, Real(0));
 #pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
-      for (int e = 0; e < g.cell_count; ++e) {
-        Vec3<Real> uc[8], ub[8];
-        ops::load_cell_corners(u, g.cell_nodes.data(), e, uc);
-        for (int c = 0; c < 8; ++c) ub[c] = zero3<Real>();
-        Mat3<Real> F_bar = zero33<Real>();
-        ops::adj_polar_rotation(ops::cell_deformation_gradient(uc, h), load_rotation(rot, e), int(status[e]),
-                                load_rotation(rot_bar, e), F_bar);
-        ops::adj_cell_deformation_gradient(F_bar, h, ub);
-        for (int c = 0; c < 8; ++c) store3(corner.data(), 8 * e + c, ub[c]);
-      }
+      for (int e = 0; e < g.cell_count; ++e)
+        ops::adj_corotation_cell(e, u, g.cell_nodes.data(), h, rot, status, rot_bar, corner.data());
       gather_corners_to_nodes(g, corner.data(), const_cast<Real*>(d.in("u_prev")), true);
       break;
     }
@@ -103,12 +96,8 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       std::vector<Real> lb(g.cell_count), mb(g.cell_count);
 #pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
       for (int e = 0; e < g.cell_count; ++e) {
-        Vec3<Real> fb[8];
-        for (int c = 0; c < 8; ++c) fb[c] = load3(f_bar, 8 * e + c);
-        Mat3<Real> R_bar = zero33<Real>();
         Real l = Real(0), m = Real(0);
-        ops::adj_corotation_offset_force(load_rotation(rot, e), weights.data() + 8 * e, lambda, mu, h, fb, R_bar, l, m);
-        add_rotation(rot_bar, e, R_bar);
+        ops::adj_corotation_force_cell(e, rot, weights.data(), lambda, mu, h, f_bar, rot_bar, l, m);
         lb[e] = l;
         mb[e] = m;
       }
@@ -194,17 +183,9 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
       std::vector<Real> corner(corner_size), lb(g.cell_count), mb(g.cell_count);
 #pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
       for (int e = 0; e < g.cell_count; ++e) {
-        Vec3<Real> pc[8], yb[8], pb[8];
-        ops::load_cell_corners(u, g.cell_nodes.data(), e, pc);
-        for (int c = 0; c < 8; ++c) {
-          yb[c] = load3(y_bar, 8 * e + c);
-          pb[c] = zero3<Real>();
-        }
-        Mat3<Real> R_bar = zero33<Real>();
         Real l = Real(0), m = Real(0);
-        ops::adj_corotated_apply(load_rotation(rot, e), weights.data() + 8 * e, lambda, mu, h, pc, yb, R_bar, l, m, pb);
-        add_rotation(rot_bar, e, R_bar);
-        for (int c = 0; c < 8; ++c) store3(corner.data(), 8 * e + c, pb[c]);
+        ops::adj_stiffness_apply_cell(e, rot, weights.data(), lambda, mu, h, u, g.cell_nodes.data(), y_bar, rot_bar,
+                                      corner.data(), l, m);
         lb[e] = l;
         mb[e] = m;
       }
@@ -272,11 +253,11 @@ void Interpreter<Real>::execute_adjoint_item(const OpNode& op, int b) {
           yb[k] = (-c.a_k) * load3(w.data(), g.cell_nodes[8 * e + k]);
           pb[k] = zero3<Real>();
         }
-        const Mat3<Real> R = load_rotation(rot, e);
+        const Mat3<Real> R = ops::load_mat3(rot, e);
         Mat3<Real> R_bar = zero33<Real>();
         Real l = Real(0), mm = Real(0);
         ops::adj_corotated_apply(R, weights.data() + 8 * e, lambda, mu, h, pc, yb, R_bar, l, mm, pb);
-        add_rotation(rot_bar, e, R_bar);
+        ops::add_mat3(rot_bar, e, R_bar);
         ops::corotated_apply(R, weights.data() + 8 * e, lambda, mu, h, pc, y);
         for (int k = 0; k < 8; ++k) store3(ku.data(), 8 * e + k, y[k]);
         lb[e] = l;
