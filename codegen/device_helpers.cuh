@@ -1,4 +1,4 @@
-// Device helpers of the generated kernels: the contact planes' layout, fixed-order block
+// Device helpers of the generated kernels: fixed-order block
 // and grid reductions, warp shuffles and the grid barrier of the persistent solves. Not compiled on its own: codegen/cuda_source.cpp pastes it (embedded at
 // build time like ops/, codegen/embed_headers.cmake) into every kernel's prelude after the ops
 // and the Real typedef, and NVRTC compiles it there (every kernel is compiled by the tests).
@@ -8,19 +8,6 @@
 #include "ops/ssc_math.h"
 namespace ssc {
 namespace gen {
-// Ground planes: 6 values each (normal, height, stiffness, soft-min alpha).
-template <class R>
-__device__ inline int load_planes(const R* q, int n, ops::GroundPlane<R>* planes) {
-  if (n > ops::kMaxGroundPlanes) n = ops::kMaxGroundPlanes;
-  for (int p = 0; p < n; ++p) {
-    const R* x = q + 6 * p;
-    planes[p].normal = make_vec3(x[0], x[1], x[2]);
-    planes[p].height = x[3];
-    planes[p].stiffness = x[4];
-    planes[p].alpha = x[5];
-  }
-  return n;
-}
 // Sums N doubles over the Threads threads of a block in a fixed order: each warp by a
 // shuffle tree, then the warp sums (in warp order) by a shuffle tree in warp 0. Every
 // thread returns with the totals. All threads of the block must call it (it has barriers).

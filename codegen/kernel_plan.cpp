@@ -23,7 +23,7 @@ std::string cut_reason(const PlannedKernel& k, const Snippet& s, const Graph& g)
   const Snippet& first = k.parts.front();
   auto barrier_reason = [&](const Snippet& x) {
     if (!x.stage.empty())
-      return fmt::format("opaque op {} (op {}): solver stage", op_kind_name(g.ops()[x.op].kind), x.op);
+      return fmt::format("opaque op {} (op {}): solver stage", g.ops()[x.op].name(), x.op);
     return std::string("reduction (ordered sum into scalars)");
   };
   if (first.barrier) return barrier_reason(first);
@@ -114,12 +114,8 @@ KernelPlan plan_kernels(const Graph& g) {
   g.validate();
   KernelPlan plan;
   std::vector<Snippet> fwd, adj;
-  for (int o = 0; o < int(g.ops().size()); ++o) {
-    if (is_opaque(g.ops()[o].kind))
-      for (Snippet& s : solver_snippets(g, o, false)) fwd.push_back(s);
-    else
-      fwd.push_back(forward_snippet(g, o));
-  }
+  for (int o = 0; o < int(g.ops().size()); ++o)
+    for (Snippet& s : forward_snippets(g, o)) fwd.push_back(s);
   for (int o = int(g.ops().size()) - 1; o >= 0; --o)
     for (Snippet& s : adjoint_snippets(g, o)) adj.push_back(s);
   plan.forward = fuse(g, fwd, "fwd");
@@ -175,7 +171,7 @@ std::string KernelPlan::text(const Graph& g, bool sanitize) const {
       s += fmt::format("    over: {} x batch\n", extent_name(k.extent));
       if (!k.stage.empty()) s += fmt::format("    stage: {}\n", k.stage);
       for (const Snippet& p : k.parts)
-        s += fmt::format("    op {:>2} {:<18} part {}\n", p.op, op_kind_name(g.ops()[p.op].kind), p.label);
+        s += fmt::format("    op {:>2} {:<18} part {}\n", p.op, g.ops()[p.op].name(), p.label);
       if (k.duplicate) {
         s += fmt::format("    cut: {}\n", k.cut);
         continue;

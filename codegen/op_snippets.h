@@ -1,9 +1,10 @@
-// Per-op code fragments for the CUDA generator: for every op kind of graph/, the body
-// of its forward (and, separately, its adjoint) for one index of its domain, written as
-// calls into the op headers of ops/ (the same functions the CPU interpreter loops), plus
-// the parameters the fragment binds. Opaque ops (NewmarkSolve, ExtensionSolve) are split
-// into solver stages: element apply over cells, node gathers and two block-per-item PCG
-// kernels with fixed-order reductions (runtime/cuda_runtime.cpp drives them).
+// Per-op code fragments for the CUDA generator: for every part of an op's spec
+// (graph/op_spec.h), forward or adjoint, a call of the part's function of ops/ for one index
+// of its extent (the same function the CPU interpreter loops), plus the parameters the
+// fragment binds; reductions become block-per-item fixed-order sums. Ops with a solver are
+// split into the solver's stages (solver_snippets.cpp): element apply over cells, node
+// gathers and block-per-item or persistent grid PCG kernels with fixed-order reductions
+// (runtime/cuda_runtime.cpp drives them).
 //
 // Conventions inside a fragment: `i` is the index in the domain, `b` the batch item,
 // `h` the cell size; tensors are bound as t_<tensor> (values) and a_<tensor>
@@ -18,22 +19,14 @@
 
 namespace ssc {
 
-// How many threads (per batch item) a kernel runs. Item: one block of SSC_ITEM threads
-// per batch item that cooperates (strided loops over the item's vectors, fixed-order
-// block reductions); its fragments see i = threadIdx.x. Grid: a cooperative launch of
-// gridDim.x blocks of SSC_GRID threads per batch item, chosen at run time, all resident
-// at once; its fragments loop over their domains themselves (gen::grid_rank(),
-// gen::grid_threads()) and synchronise the item's blocks with gen::grid_sync /
-// gen::grid_sum (persistent solver loops).
-enum class Extent { One, Cell, Node, Point, Band, Len, Item, Grid };
-const char* extent_name(Extent e);
-Domain extent_domain(Extent e);
+// Extents (graph/op_spec.h): Grid kernels' fragments loop over their domains themselves
+// (gen::grid_rank(), gen::grid_threads()) and synchronise the item's blocks with
+// gen::grid_sync / gen::grid_sum (persistent solver loops).
 
 constexpr int kItemBlock = 1024;  // threads of an Extent::Item block (SSC_ITEM)
 constexpr int kGridBlock = 256;      // threads of an Extent::Grid block (SSC_GRID)
 constexpr int kMaxGridBlocks = 256;  // blocks per batch item of an Extent::Grid kernel
 constexpr int kMaxSolveLog = 8;      // solves per step whose final state is kept (s_cg_log)
-constexpr int kMaxPlaneBars = 32;  // 4 cotangent values x ops::kMaxGroundPlanes
 
 struct KernelParam {
   enum class Kind { Tensor, Adjoint, Grid, Scratch, Vector, Value };
@@ -59,14 +52,14 @@ struct Snippet {
   std::string code;
 };
 
-// Forward fragment of a non-opaque op.
-Snippet forward_snippet(const Graph& g, int op);
-// Solver stages of an opaque op, forward or adjoint, in launch order (the iteration
-// kernels are marked "loop" in their stage).
+// The forward of one op as a sequence of fragments (its parts, or its solver's stages).
+std::vector<Snippet> forward_snippets(const Graph& g, int op);
+// Solver stages of an op with a solver, forward or adjoint (including the adjoint's
+// parameter parts), in launch order (the iteration kernels are marked "loop" in their stage).
 std::vector<Snippet> solver_snippets(const Graph& g, int op, bool adjoint);
 // The adjoint of one op as a sequence of fragments (per-element parts, node gathers,
-// ordered reductions; for opaque ops including their solver stages).
+// ordered reductions; for ops with a solver its stages).
 std::vector<Snippet> adjoint_snippets(const Graph& g, int op);
-bool is_opaque(OpKind k);
+bool is_solver(const OpNode& op);
 
 }  // namespace ssc

@@ -94,7 +94,7 @@ class Builder {
       if (x.slot == slot) return x.tensor;
     for (const OpArg& x : o.outputs)
       if (x.slot == slot) return x.tensor;
-    throw std::logic_error(fmt::format("codegen: op {} ({}) has no slot '{}'", op_, op_kind_name(o.kind), slot));
+    throw std::logic_error(fmt::format("codegen: op {} ({}) has no slot '{}'", op_, o.name(), slot));
   }
   KernelParam& add(KernelParam::Kind kind, const std::string& name, const std::string& type, bool write, bool gather,
                    int tensor) {

@@ -1,5 +1,5 @@
-// The solver stages of the opaque ops (see op_snippets.h): NewmarkSolve and
-// ExtensionSolve become setup kernels plus Jacobi-PCG, either as one persistent grid
+// The GPU schedules of the solvers (see op_snippets.h): "newmark_pcg" and
+// "band_laplacian" become setup kernels plus Jacobi-PCG, either as one persistent grid
 // kernel per solve (Extent::Grid: the whole loop, grid barriers between its phases, no
 // host checks) or as the per-iteration kernel sequence the runtime drives from the host
 // (element apply, node gather, pcg_iterate), the fallback when the batch does not fit
@@ -269,12 +269,25 @@ std::string grid_loop(const std::string& own, const std::string& iteration) {
          "}\n";
 }
 
+// A node-local damping matrix C in the system (friction, ops/newmark.h), when the op's
+// optional slot is bound: binds it and returns "C" (else ""); damping_of(...) is then the
+// term " + C_n e" of the apply at node n for the value e.
+std::string bind_damping(const Graph& g, int op, Builder& b) {
+  if (!g.ops().at(op).bound("damping")) return "";
+  b.t("damping");
+  return "C";
+}
+std::string damping_of(const std::string& bound, const std::string& n, const std::string& e) {
+  return bound.empty() ? "" : " + ops::sym3_apply($damping, " + n + ", " + e + ")";
+}
+
 // The time-step system (a_m M + a_k K) on the free nodes, identity on fixed ones: the
 // element apply over cell corners (newmark_apply_cell), a grid barrier, the node gather
 // (newmark_apply_node) with the own-node update; r, w, s are updated in place (the cell
 // phase that reads them at other nodes is over when the node phase writes).
 Snippet newmark_grid_loop(const Graph& g, int op) {
   Builder b(g, op, "newmark_pcg_grid", Extent::Grid);
+  const std::string damping_term = bind_damping(g, op, b);
   b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
   newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
   b.scratch("corner", "corner", "Real", Domain::Cell, 24, true, true);
@@ -324,7 +337,7 @@ Snippet newmark_grid_loop(const Graph& g, int op) {
       "  } else {\n"
       "    kp = ops::gather_corner_sum($corner, g_node_cell_offset, g_node_cell_entry, n);\n"
       "  }\n"
-      "  return $fixed[n] != Real(0) ? e : ops::newmark_system_apply(c, $mass[n], e, kp);\n"
+      "  return $fixed[n] != Real(0) ? e : ops::newmark_system_apply(c, $mass[n], e, kp)" + damping_of(damping_term, "n", "e") + ";\n"
       "};\n"
       "cells(kX);\n" +
       grid_start_residual(own, "  const Vec3<Real> q = node_apply(n, load3(v_x, n));\n", "v_r", "v_s") +
@@ -439,6 +452,64 @@ Snippet extension_grid_two_phase(const Graph& g, int op) {
                          "  }\n"));
 }
 
+// After the adjoint solve (w = A^-1 u_bar): rhs_bar += w, and the parameters' share of
+// -w^T A u (rotation, Lame, mass, damping coefficients, C) by cells, nodes and a reduction.
+void newmark_adjoint_parameters(const Graph& g, int op, std::vector<Snippet>& s) {
+  const std::string n = "op" + std::to_string(op);
+    s.push_back(Builder(g, op, "newmark_solve_rhs", Extent::Node)
+                    .a("rhs").scratch("w", "w_" + n, "Real", Domain::Node, 3, false).barrier()
+                    .code("for (int k = 0; k < 3; ++k) $d_rhs[3 * i + k] += $w[3 * i + k];\n"));
+    Builder cell(g, op, "newmark_solve_cells", Extent::Cell);
+    newmark_scalars(cell).t("rotation").t("lambda").t("mu").t("u", false, true).a("rotation");
+    cell.grid("cell_weights", "Real").grid("cell_nodes", "int").scratch("w", "w_" + n, "Real", Domain::Node, 3, false, true);
+    cell.scratch("ku", "ku_" + n, "Real", Domain::Cell, 24, true).scratch("red", "red_" + n, "Real", Domain::Cell, 2, true);
+    s.push_back(cell.code(std::string(kCoefficients) +
+                          "Vec3<Real> pc[8], yb[8], pb[8], y[8];\n"
+                          "ops::load_cell_corners($u, g_cell_nodes, i, pc);\n"
+                          "for (int k = 0; k < 8; ++k) { yb[k] = (-c.a_k) * load3($w, g_cell_nodes[8 * i + k]); pb[k] = zero3<Real>(); }\n"
+                          "const Mat3<Real> R = ops::load_mat3($rotation, i);\n"
+                          "Mat3<Real> R_bar = zero33<Real>();\n"
+                          "Real l = Real(0), mm = Real(0);\n"
+                          "ops::adj_corotated_apply(R, g_cell_weights + 8 * i, $lambda[0], $mu[0], h, pc, yb, R_bar, l, mm, pb);\n"
+                          "ops::add_mat3($d_rotation, i, R_bar);\n"
+                          "ops::corotated_apply(R, g_cell_weights + 8 * i, $lambda[0], $mu[0], h, pc, y);\n"
+                          "for (int k = 0; k < 8; ++k) store3($ku, 8 * i + k, y[k]);\n"
+                          "$red[2 * i] = l;\n"
+                          "$red[2 * i + 1] = mm;\n"));
+    Builder node(g, op, "newmark_solve_nodes", Extent::Node);
+    const std::string damped = bind_damping(g, op, node);
+    if (!damped.empty()) node.a("damping");
+    newmark_scalars(node).t("mass").t("fixed").t("u").a("mass").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
+    node.scratch("w", "w_" + n, "Real", Domain::Node, 3, false).scratch("ku", "ku_" + n, "Real", Domain::Cell, 24, false, true);
+    node.scratch("red2", "red2_" + n, "double", Domain::Node, 2, true);
+    s.push_back(node.code(std::string(kCoefficients) +
+                          "if ($fixed[i] != Real(0)) { $red2[2 * i] = 0; $red2[2 * i + 1] = 0; }\n"
+                          "else {\n"
+                          "  const Vec3<Real> kui = ops::gather_corner_sum($ku, g_node_cell_offset, g_node_cell_entry, i);\n"
+                          "  Vec3<Real> ub = zero3<Real>(), kb = zero3<Real>();\n"
+                          "  ops::NewmarkCoefficientBars<Real> cb;\n"
+                          "  ops::adj_newmark_system_apply(c, $mass[i], load3($u, i), kui, Real(-1) * load3($w, i), $d_mass[i], ub, kb, cb);\n" +
+                          (damped.empty() ? std::string()
+                                          : std::string("  ops::adj_sym3_apply($d_damping, i, load3($u, i), Real(-1) * load3($w, i));\n")) +
+                          "  $red2[2 * i] = double(cb.a_m);\n"
+                          "  $red2[2 * i + 1] = double(cb.a_k);\n"
+                          "}\n"));
+    s.push_back(Builder(g, op, "newmark_solve_reduce", Extent::Item)
+                    .a("lambda").a("mu").a("mass_damping").a("stiffness_damping")
+                    .scratch("red", "red_" + n, "Real", Domain::Cell, 2, false)
+                    .scratch("red2", "red2_" + n, "double", Domain::Node, 2, false).barrier()
+                    .code("double v[4] = {0, 0, 0, 0};\n"
+                          "for (int e = i; e < n_cell; e += SSC_ITEM) { v[0] += double($red[2 * e]); v[1] += double($red[2 * e + 1]); }\n"
+                          "for (int k = i; k < n_node; k += SSC_ITEM) { v[2] += $red2[2 * k]; v[3] += $red2[2 * k + 1]; }\n"
+                          "gen::block_sum<4>(v);\n"
+                          "if (i == 0) {\n"
+                          "  $d_lambda[0] += Real(v[0]);\n"
+                          "  $d_mu[0] += Real(v[1]);\n"
+                          "  $d_mass_damping[0] += Real(v[2]);\n"
+                          "  $d_stiffness_damping[0] += Real(v[3]);\n"
+                          "}\n"));
+    }
+
 std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   const std::string x3 = "3 * n_node";
   std::vector<Snippet> s;
@@ -460,13 +531,15 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   }
   {
     Builder b(g, op, "newmark_setup", Extent::Node);
+    const std::string damped = bind_damping(g, op, b);
     newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
     b.scratch("corner", "corner", "Real", Domain::Cell, 24, false, true);
     b.vec("rhs", false, x3).vec("x", true, x3).vec("b", true, x3).vec("inv_diag", true, x3).value("zero_x", "int");
     b.stage("node gather of the diagonal, masked right-hand side", true);
     s.push_back(b.code(std::string(kCoefficients) +
         "const Vec3<Real> kd = ops::gather_corner_sum($corner, g_node_cell_offset, g_node_cell_entry, i);\n"
-        "const Vec3<Real> d = ops::newmark_system_apply(c, $mass[i], make_vec3(Real(1), Real(1), Real(1)), kd);\n"
+        "Vec3<Real> d = ops::newmark_system_apply(c, $mass[i], make_vec3(Real(1), Real(1), Real(1)), kd);\n" +
+        (damped.empty() ? std::string() : "d += make_vec3($damping[6 * i], $damping[6 * i + 1], $damping[6 * i + 2]);\n") +
         "const bool fixed = $fixed[i] != Real(0);\n"
         "for (int k = 0; k < 3; ++k) {\n"
         "  v_inv_diag[3 * i + k] = fixed ? Real(1) : Real(1) / d[k];\n"
@@ -489,6 +562,7 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   }
   {
     Builder b(g, op, "newmark_apply_node", Extent::Node);
+    const std::string damped = bind_damping(g, op, b);
     newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
     b.scratch("corner", "corner", "Real", Domain::Cell, 24, false, true).vec("p", false, x3).vec("q", true, x3);
     b.value("gate", "int").scratch("cg", "cg", "double", Domain::Scalar, 16, false);
@@ -496,10 +570,12 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
     s.push_back(b.code("if (gate != 0 && $cg[6] == 0.0) return;  // solve stopped for this item\n" +
         std::string(kCoefficients) +
         "const Vec3<Real> kp = ops::gather_corner_sum($corner, g_node_cell_offset, g_node_cell_entry, i);\n"
-        "store3(v_q, i, $fixed[i] != Real(0) ? load3(v_p, i) : ops::newmark_system_apply(c, $mass[i], load3(v_p, i), kp));\n"));
+        "store3(v_q, i, $fixed[i] != Real(0) ? load3(v_p, i) : ops::newmark_system_apply(c, $mass[i], load3(v_p, i), kp)" +
+        damping_of(damped, "i", "load3(v_p, i)") + ");\n"));
   }
   for (Snippet& p : pcg_snippets(g, op)) s.push_back(p);
   s.push_back(newmark_grid_loop(g, op));
+  if (adjoint) newmark_adjoint_parameters(g, op, s);
   return s;
 }
 
@@ -549,6 +625,15 @@ std::vector<Snippet> extension_solver(const Graph& g, int op, bool adjoint) {
   for (Snippet& p : pcg_snippets(g, op)) s.push_back(p);
   s.push_back(extension_grid_loop(g, op));
   s.push_back(extension_grid_two_phase(g, op));
+  if (adjoint) {
+    // y = L^-1 band_u_bar goes to the active neighbours' u cotangent.
+    const std::string n = "op" + std::to_string(op);
+  s.push_back(Builder(g, op, "extension_solve_nodes", Extent::Node)
+                  .a("u").grid("node_band_offset", "int").grid("node_band_entry", "int")
+                  .scratch("y", "y_" + n, "Real", Domain::Band, 3, false, true).barrier()
+                  .code("for (int k = g_node_band_offset[i]; k < g_node_band_offset[i + 1]; ++k)\n"
+                        "  add3($d_u, i, load3($y, g_node_band_entry[k]));\n"));
+  }
   return s;
 }
 
@@ -556,10 +641,10 @@ std::vector<Snippet> extension_solver(const Graph& g, int op, bool adjoint) {
 }  // namespace
 
 std::vector<Snippet> solver_snippets(const Graph& g, int op, bool adjoint) {
-  const OpKind k = g.ops().at(op).kind;
-  if (k == OpKind::NewmarkSolve) return newmark_solver(g, op, adjoint);
-  if (k == OpKind::ExtensionSolve) return extension_solver(g, op, adjoint);
-  throw std::logic_error("codegen: solver_snippets of a non-opaque op");
+  const std::string& solver = g.ops().at(op).spec->solver;
+  if (solver == "newmark_pcg") return newmark_solver(g, op, adjoint);
+  if (solver == "band_laplacian") return extension_solver(g, op, adjoint);
+  throw std::logic_error("codegen: no GPU schedule for solver '" + solver + "' (op " + g.ops().at(op).name() + ")");
 }
 
 }  // namespace ssc

@@ -7,53 +7,20 @@
 
 namespace ssc {
 
-const char* domain_name(Domain d) {
-  switch (d) {
-    case Domain::Scalar: return "scalar";
-    case Domain::Cell: return "cell";
-    case Domain::Node: return "node";
-    case Domain::Point: return "point";
-    case Domain::Band: return "band";
-  }
-  return "?";
-}
-
-const char* access_name(Access a) {
-  switch (a) {
-    case Access::Pointwise: return "pointwise";
-    case Access::Gather: return "gather";
-    case Access::ScatterAdd: return "scatter-add";
-    case Access::Reduction: return "reduction";
-    case Access::Opaque: return "opaque";
-  }
-  return "?";
-}
-
-const char* op_kind_name(OpKind k) {
-  switch (k) {
-    case OpKind::Lame: return "lame";
-    case OpKind::NodeMass: return "node_mass";
-    case OpKind::Corotation: return "corotation";
-    case OpKind::CorotationForce: return "corotation_force";
-    case OpKind::ContactForce: return "contact_force";
-    case OpKind::NodeForce: return "node_force";
-    case OpKind::StiffnessApply: return "stiffness_apply";
-    case OpKind::NewmarkRhs: return "newmark_rhs";
-    case OpKind::NewmarkSolve: return "newmark_solve";
-    case OpKind::VelocityUpdate: return "velocity_update";
-    case OpKind::ExtensionSolve: return "extension_solve";
-  }
-  return "?";
-}
-
-static int find_slot(const std::vector<OpArg>& args, const std::string& slot, OpKind kind) {
+static int find_slot(const std::vector<OpArg>& args, const std::string& slot, const std::string& op) {
   for (const OpArg& a : args)
     if (a.slot == slot) return a.tensor;
-  throw std::logic_error(fmt::format("op {} has no argument '{}'", op_kind_name(kind), slot));
+  throw std::logic_error(fmt::format("op {} has no argument '{}'", op, slot));
 }
 
-int OpNode::input(const std::string& slot) const { return find_slot(inputs, slot, kind); }
-int OpNode::output(const std::string& slot) const { return find_slot(outputs, slot, kind); }
+int OpNode::input(const std::string& slot) const { return find_slot(inputs, slot, name()); }
+int OpNode::output(const std::string& slot) const { return find_slot(outputs, slot, name()); }
+bool OpNode::bound(const std::string& slot) const {
+  for (const std::vector<OpArg>* args : {&inputs, &outputs})
+    for (const OpArg& a : *args)
+      if (a.slot == slot) return true;
+  return false;
+}
 
 int Graph::add_tensor(const std::string& name, Domain domain, int components, TensorInfo::Role role,
                       DType dtype) {
@@ -68,10 +35,25 @@ int Graph::add_tensor(const std::string& name, Domain domain, int components, Te
   return int(tensors_.size()) - 1;
 }
 
-int Graph::add_op(OpKind kind, Domain domain, std::vector<OpArg> inputs, const std::vector<NewOutput>& outputs) {
-  OpNode op{kind, domain, std::move(inputs), {}};
+int Graph::add_op(const std::string& name, std::vector<OpArg> inputs, const std::vector<NewOutput>& outputs) {
+  const OpSpec& spec = op_spec(name);
+  OpNode op{&spec, spec.domain, std::move(inputs), {}};
+  const Domain domain = spec.domain;
+  for (OpArg& a : op.inputs) {
+    const SlotSpec* s = spec.slot(a.slot);
+    if (!s || s->output) throw std::logic_error(fmt::format("op {} has no input slot '{}'", name, a.slot));
+    a.access = s->access;
+  }
+  for (const SlotSpec& s : spec.slots) {
+    bool given = false;
+    for (const OpArg& a : op.inputs) given |= a.slot == s.name;
+    for (const NewOutput& o : outputs) given |= o.slot == s.name;
+    if (!given && !s.optional) throw std::logic_error(fmt::format("op {}: slot '{}' is not bound", name, s.name));
+  }
   const int index = int(ops_.size());
   for (const NewOutput& o : outputs) {
+    const SlotSpec* s = spec.slot(o.slot);
+    if (!s || !s->output) throw std::logic_error(fmt::format("op {} has no output slot '{}'", name, o.slot));
     const int id = add_tensor(o.name, o.domain, o.components, TensorInfo::Role::Intermediate);
     tensors_[id].producer = index;
     op.outputs.push_back({o.slot, id, o.domain == domain ? Access::Pointwise : Access::Opaque});
@@ -91,14 +73,14 @@ void Graph::validate() const {
     const OpNode& op = ops_[o];
     for (const OpArg& a : op.inputs) {
       if (a.tensor < 0 || a.tensor >= int(tensors_.size()))
-        throw std::logic_error(fmt::format("op {} ({}): input '{}' is unbound", o, op_kind_name(op.kind), a.slot));
+        throw std::logic_error(fmt::format("op {} ({}): input '{}' is unbound", o, op.name(), a.slot));
       const TensorInfo& t = tensors_[a.tensor];
       if (t.role == TensorInfo::Role::Intermediate && t.producer >= int(o))
         throw std::logic_error(fmt::format("op {} ({}) reads '{}' before op {} writes it", o,
-                                           op_kind_name(op.kind), t.name, t.producer));
+                                           op.name(), t.name, t.producer));
       if (a.access == Access::Pointwise && t.domain != op.domain && t.domain != Domain::Scalar)
         throw std::logic_error(fmt::format("op {} ({}) reads '{}' ({}) pointwise over domain {}", o,
-                                           op_kind_name(op.kind), t.name, domain_name(t.domain),
+                                           op.name(), t.name, domain_name(t.domain),
                                            domain_name(op.domain)));
     }
     for (const OpArg& a : op.outputs) {
@@ -120,7 +102,7 @@ std::string Graph::describe() const {
   s += "ops:\n";
   for (size_t o = 0; o < ops_.size(); ++o) {
     const OpNode& op = ops_[o];
-    s += fmt::format("  [{}] {} over {}\n", o, op_kind_name(op.kind), domain_name(op.domain));
+    s += fmt::format("  [{}] {} over {}\n", o, op.name(), domain_name(op.domain));
     for (const OpArg& a : op.inputs)
       s += fmt::format("      in  {:<12} %{} {} ({})\n", a.slot, a.tensor, tensors_[a.tensor].name, access_name(a.access));
     for (const OpArg& a : op.outputs)

@@ -17,29 +17,11 @@
 #include <string>
 #include <vector>
 
+#include "graph/op_spec.h"
+
 namespace ssc {
 
-enum class Domain { Scalar, Cell, Node, Point, Band };
-enum class Access { Pointwise, Gather, ScatterAdd, Reduction, Opaque };
 enum class DType { Real, Int };
-
-enum class OpKind {
-  Lame,               // scalar: (E, nu) -> (lambda, mu)
-  NodeMass,           // node: rho * V_i
-  Corotation,         // cell: u- gathered at 8 corners -> R, polar status
-  CorotationForce,    // cell: R -> per-corner offset force
-  ContactForce,       // point: edge-node states gathered -> per-point contact force
-  NodeForce,          // node: gathers corner and point forces, adds gravity
-  StiffnessApply,     // cell: R, nodal vector gathered -> per-corner K p
-  NewmarkRhs,         // node: gathers K u- -> right-hand side
-  NewmarkSolve,       // opaque: Jacobi-PCG on (a_m M + a_k K) u = b
-  VelocityUpdate,     // node: theta-scheme velocity
-  ExtensionSolve,     // opaque: band Laplacian with active nodes as Dirichlet values
-};
-
-const char* domain_name(Domain d);
-const char* access_name(Access a);
-const char* op_kind_name(OpKind k);
 
 struct TensorInfo {
   std::string name;
@@ -51,19 +33,21 @@ struct TensorInfo {
 };
 
 struct OpArg {
-  std::string slot;  // name the op body uses for it
+  std::string slot;  // the spec's slot name
   int tensor = -1;
-  Access access = Access::Pointwise;
+  Access access = Access::Pointwise;  // from the spec
 };
 
 struct OpNode {
-  OpKind kind;
+  const OpSpec* spec = nullptr;  // from the registry (ops/registry.cpp)
   Domain domain;
   std::vector<OpArg> inputs;
   std::vector<OpArg> outputs;
 
   int input(const std::string& slot) const;   // tensor id bound to slot; throws if missing
   int output(const std::string& slot) const;
+  bool bound(const std::string& slot) const;  // an (optional) slot has a tensor
+  const std::string& name() const { return spec->name; }
 };
 
 class Graph {
@@ -76,13 +60,17 @@ class Graph {
   int add_state(const std::string& name, Domain domain, int components) {
     return add_tensor(name, domain, components, TensorInfo::Role::State);
   }
-  // Appends an op; outputs given as (slot, name, domain, components) are created here.
+  // Appends the registered op `op`; inputs bind its slots to tensors (their access kinds
+  // come from the spec), outputs given as (slot, name, domain, components) are created here.
   struct NewOutput {
     std::string slot, name;
     Domain domain;
     int components;
   };
-  int add_op(OpKind kind, Domain domain, std::vector<OpArg> inputs, const std::vector<NewOutput>& outputs);
+  int add_op(const std::string& op, std::vector<OpArg> inputs, const std::vector<NewOutput>& outputs);
+  // Contact planes: the run-time extent of the per-plane tensors (n_plane of the parts).
+  void set_plane_count(int n) { plane_count_ = n; }
+  int plane_count() const { return plane_count_; }
 
   const std::vector<TensorInfo>& tensors() const { return tensors_; }
   const std::vector<OpNode>& ops() const { return ops_; }
@@ -98,6 +86,7 @@ class Graph {
  private:
   std::vector<TensorInfo> tensors_;
   std::vector<OpNode> ops_;
+  int plane_count_ = 0;
 };
 
 }  // namespace ssc

@@ -9,6 +9,8 @@
 // the time integrator. softmin(x) = -log(1 + exp(-alpha x)) / alpha. The force f n is
 // split onto the two edge nodes with weights (1 - t, t).
 #pragma once
+#include "ops/gather.h"
+#include "ops/part.h"
 #include "ops/ssc_math.h"
 
 namespace ssc {
@@ -86,8 +88,20 @@ SSC_HD inline void adj_contact_force(Vec3<Real> x, Vec3<Real> v, Real area, cons
   }
 }
 
-// ---- the per-index parts of the contact op: one contact point each, called alike by the
-// interpreter (runtime/) and the generated kernels (codegen/) ----
+// The planes' tensor holds 6 values per plane: normal (3), height, stiffness, soft-min alpha.
+constexpr int kPlaneValues = 6;
+
+template <class Real>
+SSC_HD inline int load_ground_planes(const Real* q, int n, GroundPlane<Real>* planes) {
+  if (n > kMaxGroundPlanes) n = kMaxGroundPlanes;
+  for (int p = 0; p < n; ++p, q += kPlaneValues) {
+    planes[p].normal = make_vec3(q[0], q[1], q[2]);
+    planes[p].height = q[3];
+    planes[p].stiffness = q[4];
+    planes[p].alpha = q[5];
+  }
+  return n;
+}
 
 // Contact point i sits at (1 - t, t) between the active nodes point_nodes[2i], [2i + 1] of
 // an edge: its position (rest + displacement) and velocity.
@@ -100,27 +114,73 @@ SSC_HD inline void contact_point_state(int i, const int* point_nodes, const Real
   vel = (Real(1) - t) * load3(v, na) + t * load3(v, nb);
 }
 
+// ---- the contact op: one contact point each ----
+
 template <class Real>
-SSC_HD inline Vec3<Real> contact_point_force(int i, const int* point_nodes, const Real* point_t, const Real* point_area,
-                                             const Real* node_rest, const Real* u_prev, const Real* v_prev,
-                                             const GroundPlane<Real>* planes, int plane_count, Real dt, Real theta) {
+SSC_HD inline void contact_force_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_t,
+                                       const Real* point_area, const Real* node_rest, const Real* u_prev,
+                                       const Real* v_prev, const Real* ground_planes, const Real* dt, const Real* theta,
+                                       Real* point_force) {
+  GroundPlane<Real> planes[kMaxGroundPlanes];
+  const int plane_count = load_ground_planes(ground_planes, cx.n_plane, planes);
   Vec3<Real> x, vel;
   contact_point_state(i, point_nodes, point_t, node_rest, u_prev, v_prev, x, vel);
-  return contact_force(x, vel, point_area[i], planes, plane_count, dt, theta);
+  store3(point_force, i, contact_force(x, vel, point_area[i], planes, plane_count, dt[0], theta[0]));
 }
 
-// The point's position and velocity cotangents (the engine's gather takes them to the edge's
-// nodes) and the planes'.
+// The point's position and velocity cotangents (x_bar, v_bar; gathered to the edge's nodes by
+// the next parts) and its share of the planes' (plane_bar_share, laid out like the planes'
+// tensor; summed over the points by a reduction).
 template <class Real>
-SSC_HD inline void adj_contact_point_force(int i, const int* point_nodes, const Real* point_t, const Real* point_area,
-                                           const Real* node_rest, const Real* u_prev, const Real* v_prev,
-                                           const GroundPlane<Real>* planes, int plane_count, Real dt, Real theta,
-                                           Vec3<Real> f_bar, Vec3<Real>& x_bar, Vec3<Real>& v_bar, Vec3<Real>* normal_bar,
-                                           Real* height_bar) {
-  Vec3<Real> x, vel;
+SSC_HD inline void adj_contact_force_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_t,
+                                           const Real* point_area, const Real* node_rest, const Real* u_prev,
+                                           const Real* v_prev, const Real* ground_planes, const Real* dt,
+                                           const Real* theta, const Real* point_force_bar, Real* x_bar, Real* v_bar,
+                                           Real* plane_bar_share) {
+  GroundPlane<Real> planes[kMaxGroundPlanes];
+  const int plane_count = load_ground_planes(ground_planes, cx.n_plane, planes);
+  Vec3<Real> x, vel, xb = zero3<Real>(), vb = zero3<Real>();
   contact_point_state(i, point_nodes, point_t, node_rest, u_prev, v_prev, x, vel);
-  adj_contact_force(x, vel, point_area[i], planes, plane_count, dt, theta, f_bar, x_bar, v_bar, normal_bar, height_bar);
+  Vec3<Real> normal_bar[kMaxGroundPlanes];
+  Real height_bar[kMaxGroundPlanes];
+  for (int k = 0; k < plane_count; ++k) {
+    normal_bar[k] = zero3<Real>();
+    height_bar[k] = Real(0);
+  }
+  adj_contact_force(x, vel, point_area[i], planes, plane_count, dt[0], theta[0], load3(point_force_bar, i), xb, vb,
+                    normal_bar, height_bar);
+  store3(x_bar, i, xb);
+  store3(v_bar, i, vb);
+  Real* pb = plane_bar_share + kPlaneValues * cx.n_plane * i;
+  for (int k = 0; k < plane_count; ++k, pb += kPlaneValues) {
+    pb[0] = normal_bar[k].x, pb[1] = normal_bar[k].y, pb[2] = normal_bar[k].z, pb[3] = height_bar[k];
+    pb[4] = Real(0), pb[5] = Real(0);  // stiffness and sharpness are data, not fitted
+  }
 }
+
+#ifdef SSC_OP_SPECS
+// Soft-min penalty force at every contact point from u-, v- gathered at its edge's nodes.
+inline OpSpec contact_force_spec() {
+  OpSpec s;
+  s.name = "contact_force";
+  s.domain = Domain::Point;
+  s.slots = {in("u_prev", Access::Gather), in("v_prev", Access::Gather), in("ground_planes"), constant_in("dt"),
+             constant_in("theta"), out("point_force")};
+  s.scratch = {{"xbar", Domain::Point, 3}, {"vbar", Domain::Point, 3}, {"planebar", Domain::Point, 0, "ground_planes"}};
+  s.forward = {part("contact_force", Extent::Point, SSC_PART(contact_force_point),
+                    {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "u_prev^", "v_prev^", "ground_planes", "dt",
+                     "theta", "point_force"})};
+  s.adjoint = {part("contact_force", Extent::Point, SSC_ADJOINT_PART(adj_contact_force_point),
+                    {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "u_prev^", "v_prev^", "ground_planes", "dt",
+                     "theta", "d_point_force", "$xbar", "$vbar", "$planebar"}),
+               part("contact_force_gather", Extent::Node, SSC_ADJOINT_PART(add_point_sum),
+                    {"$xbar^", "#point_t", "#node_point_offset", "#node_point_entry", "d_u_prev"}),
+               part("contact_force_gather", Extent::Node, SSC_ADJOINT_PART(add_point_sum),
+                    {"$vbar^", "#point_t", "#node_point_offset", "#node_point_entry", "d_v_prev"}),
+               reduction("contact_force_reduce", {"$planebar"}, {"d_ground_planes"})};
+  return s;
+}
+#endif
 
 }  // namespace ops
 }  // namespace ssc

@@ -6,6 +6,7 @@
 #pragma once
 #include "ops/elasticity.h"
 #include "ops/gather.h"
+#include "ops/part.h"
 #include "ops/polar.h"
 #include "ops/ssc_math.h"
 
@@ -32,21 +33,22 @@ SSC_HD inline void add_mat3(Real* r, int cell, const Mat3<Real>& m) {
 
 // Cell i's rotation and polar status (kPolarDegenerate: the identity was taken).
 template <class Real>
-SSC_HD inline int corotation_cell(int i, const Real* u_prev, const int* cell_nodes, Real h, Real* rotation, Real* status) {
+SSC_HD inline void corotation_cell(int i, const PartContext<Real>& cx, const Real* u_prev, const int* cell_nodes,
+                                   Real* rotation, Real* status) {
   Vec3<Real> uc[8];
   load_cell_corners(u_prev, cell_nodes, i, uc);
   Mat3<Real> R;
-  const int s = polar_rotation(cell_deformation_gradient(uc, h), R);
+  const int s = polar_rotation(cell_deformation_gradient(uc, cx.h), R);
   store_mat3(rotation, i, R);
   status[i] = Real(s);
-  return s;
 }
 
 // The cell's corner cotangents of u_prev (corner_bar, 8 per cell; the engine gathers them to
 // the nodes) from the rotation's cotangent.
 template <class Real>
-SSC_HD inline void adj_corotation_cell(int i, const Real* u_prev, const int* cell_nodes, Real h, const Real* rotation,
-                                       const Real* status, const Real* rotation_bar, Real* corner_bar) {
+SSC_HD inline void adj_corotation_cell(int i, const PartContext<Real>& cx, const Real* u_prev, const int* cell_nodes,
+                                       const Real* rotation, const Real* status, const Real* rotation_bar, Real* corner_bar) {
+  const Real h = cx.h;
   Vec3<Real> uc[8], ub[8];
   load_cell_corners(u_prev, cell_nodes, i, uc);
   for (int c = 0; c < 8; ++c) ub[c] = zero3<Real>();
@@ -58,42 +60,49 @@ SSC_HD inline void adj_corotation_cell(int i, const Real* u_prev, const int* cel
 }
 
 template <class Real>
-SSC_HD inline void corotation_force_cell(int i, const Real* rotation, const Real* weights, Real lambda, Real mu, Real h,
-                                         Real* corner_force) {
+SSC_HD inline void corotation_force_cell(int i, const PartContext<Real>& cx, const Real* rotation, const Real* weights,
+                                         const Real* lambda, const Real* mu, Real* corner_force) {
   Vec3<Real> fc[8];
-  corotation_offset_force(load_mat3(rotation, i), weights + 8 * i, lambda, mu, h, fc);
+  corotation_offset_force(load_mat3(rotation, i), weights + 8 * i, lambda[0], mu[0], cx.h, fc);
   for (int c = 0; c < 8; ++c) store3(corner_force, 8 * i + c, fc[c]);
 }
 
 // Accumulates the rotation's cotangent; the cell's shares of the Lame cotangents go to
-// lambda_bar and mu_bar (the engine sums them over the cells in a fixed order).
+// lame_bar_share (2 per cell; a reduction part sums them over the cells in a fixed order).
 template <class Real>
-SSC_HD inline void adj_corotation_force_cell(int i, const Real* rotation, const Real* weights, Real lambda, Real mu, Real h,
-                                             const Real* corner_force_bar, Real* rotation_bar, Real& lambda_bar,
-                                             Real& mu_bar) {
+SSC_HD inline void adj_corotation_force_cell(int i, const PartContext<Real>& cx, const Real* rotation, const Real* weights,
+                                             const Real* lambda, const Real* mu, const Real* corner_force_bar,
+                                             Real* rotation_bar, Real* lame_bar_share) {
   Vec3<Real> fb[8];
   for (int c = 0; c < 8; ++c) fb[c] = load3(corner_force_bar, 8 * i + c);
   Mat3<Real> R_bar = zero33<Real>();
-  adj_corotation_offset_force(load_mat3(rotation, i), weights + 8 * i, lambda, mu, h, fb, R_bar, lambda_bar, mu_bar);
+  Real lambda_bar = Real(0), mu_bar = Real(0);
+  adj_corotation_offset_force(load_mat3(rotation, i), weights + 8 * i, lambda[0], mu[0], cx.h, fb, R_bar, lambda_bar,
+                              mu_bar);
   add_mat3(rotation_bar, i, R_bar);
+  lame_bar_share[2 * i] = lambda_bar;
+  lame_bar_share[2 * i + 1] = mu_bar;
 }
 
 // Per-corner K p of cell i (the matrix-free stiffness product).
 template <class Real>
-SSC_HD inline void stiffness_apply_cell(int i, const Real* rotation, const Real* weights, Real lambda, Real mu, Real h,
-                                        const Real* p, const int* cell_nodes, Real* corner_out) {
+SSC_HD inline void stiffness_apply_cell(int i, const PartContext<Real>& cx, const Real* rotation, const Real* weights,
+                                        const Real* lambda, const Real* mu, const Real* p, const int* cell_nodes,
+                                        Real* corner_out) {
   Vec3<Real> pc[8], y[8];
   load_cell_corners(p, cell_nodes, i, pc);
-  corotated_apply(load_mat3(rotation, i), weights + 8 * i, lambda, mu, h, pc, y);
+  corotated_apply(load_mat3(rotation, i), weights + 8 * i, lambda[0], mu[0], cx.h, pc, y);
   for (int c = 0; c < 8; ++c) store3(corner_out, 8 * i + c, y[c]);
 }
 
 // Accumulates the rotation's cotangent, stores p's corner cotangents (corner_bar, 8 per cell)
-// and gives the cell's Lame shares.
+// and the cell's Lame shares (lame_bar_share, 2 per cell).
 template <class Real>
-SSC_HD inline void adj_stiffness_apply_cell(int i, const Real* rotation, const Real* weights, Real lambda, Real mu, Real h,
-                                            const Real* p, const int* cell_nodes, const Real* corner_out_bar,
-                                            Real* rotation_bar, Real* corner_bar, Real& lambda_bar, Real& mu_bar) {
+SSC_HD inline void adj_stiffness_apply_cell(int i, const PartContext<Real>& cx, const Real* rotation, const Real* weights,
+                                            const Real* lambda, const Real* mu, const Real* p, const int* cell_nodes,
+                                            const Real* corner_out_bar, Real* rotation_bar, Real* corner_bar,
+                                            Real* lame_bar_share) {
+  Real lambda_bar = Real(0), mu_bar = Real(0);
   Vec3<Real> pc[8], yb[8], pb[8];
   load_cell_corners(p, cell_nodes, i, pc);
   for (int c = 0; c < 8; ++c) {
@@ -101,10 +110,65 @@ SSC_HD inline void adj_stiffness_apply_cell(int i, const Real* rotation, const R
     pb[c] = zero3<Real>();
   }
   Mat3<Real> R_bar = zero33<Real>();
-  adj_corotated_apply(load_mat3(rotation, i), weights + 8 * i, lambda, mu, h, pc, yb, R_bar, lambda_bar, mu_bar, pb);
+  adj_corotated_apply(load_mat3(rotation, i), weights + 8 * i, lambda[0], mu[0], cx.h, pc, yb, R_bar, lambda_bar, mu_bar,
+                      pb);
   add_mat3(rotation_bar, i, R_bar);
   for (int c = 0; c < 8; ++c) store3(corner_bar, 8 * i + c, pb[c]);
+  lame_bar_share[2 * i] = lambda_bar;
+  lame_bar_share[2 * i + 1] = mu_bar;
 }
+
+#ifdef SSC_OP_SPECS
+// u- gathered at the cell's corners -> its rotation and polar status.
+inline OpSpec corotation_spec() {
+  OpSpec s;
+  s.name = "corotation";
+  s.domain = Domain::Cell;
+  s.slots = {in("u_prev", Access::Gather), out("rotation"), out("polar_status")};
+  s.slots.back().differentiable = false;
+  s.scratch = {{"corner", Domain::Cell, 24}};
+  s.forward = {part("corotation", Extent::Cell, SSC_PART(corotation_cell),
+                    {"u_prev^", "#cell_nodes", "rotation", "polar_status"})};
+  s.adjoint = {part("corotation", Extent::Cell, SSC_ADJOINT_PART(adj_corotation_cell),
+                    {"u_prev^", "#cell_nodes", "rotation", "polar_status", "d_rotation", "$corner"}),
+               part("corotation_gather", Extent::Node, SSC_ADJOINT_PART(add_corner_sum),
+                    {"$corner^", "#node_cell_offset", "#node_cell_entry", "d_u_prev"})};
+  return s;
+}
+
+// The rotation -> the corotation offset force at the cell's corners.
+inline OpSpec corotation_force_spec() {
+  OpSpec s;
+  s.name = "corotation_force";
+  s.domain = Domain::Cell;
+  s.slots = {in("rotation"), in("lambda"), in("mu"), out("corner_force")};
+  s.scratch = {{"red", Domain::Cell, 2}};
+  s.forward = {part("corotation_force", Extent::Cell, SSC_PART(corotation_force_cell),
+                    {"rotation", "#cell_weights", "lambda", "mu", "corner_force"})};
+  s.adjoint = {part("corotation_force", Extent::Cell, SSC_ADJOINT_PART(adj_corotation_force_cell),
+                    {"rotation", "#cell_weights", "lambda", "mu", "d_corner_force", "d_rotation", "$red"}),
+               reduction("corotation_force_reduce", {"$red"}, {"d_lambda", "d_mu"})};
+  return s;
+}
+
+// R K R^T u- at the cell's corners (the Newmark right-hand side's stiffness term).
+inline OpSpec stiffness_apply_spec() {
+  OpSpec s;
+  s.name = "stiffness_apply";
+  s.domain = Domain::Cell;
+  s.slots = {in("rotation"), in("lambda"), in("mu"), in("u_prev", Access::Gather), out("ku_corner")};
+  s.scratch = {{"corner", Domain::Cell, 24}, {"red", Domain::Cell, 2}};
+  s.forward = {part("stiffness_apply", Extent::Cell, SSC_PART(stiffness_apply_cell),
+                    {"rotation", "#cell_weights", "lambda", "mu", "u_prev^", "#cell_nodes", "ku_corner"})};
+  s.adjoint = {part("stiffness_apply", Extent::Cell, SSC_ADJOINT_PART(adj_stiffness_apply_cell),
+                    {"rotation", "#cell_weights", "lambda", "mu", "u_prev^", "#cell_nodes", "d_ku_corner", "d_rotation",
+                     "$corner", "$red"}),
+               part("stiffness_apply_gather", Extent::Node, SSC_ADJOINT_PART(add_corner_sum),
+                    {"$corner^", "#node_cell_offset", "#node_cell_entry", "d_u_prev"}),
+               reduction("stiffness_apply_reduce", {"$red"}, {"d_lambda", "d_mu"})};
+  return s;
+}
+#endif
 
 }  // namespace ops
 }  // namespace ssc

@@ -7,6 +7,7 @@
 //   sigma = lambda tr(eps) I + 2 mu eps,
 // which is applied matrix-free: the stiffness matrix is never assembled.
 #pragma once
+#include "ops/part.h"
 #include "ops/ssc_math.h"
 
 namespace ssc {
@@ -233,6 +234,34 @@ SSC_HD inline void adj_lame_from_young(Real E, Real nu, Real lambda_bar, Real mu
   // d mu/d nu = -E / (2 a^2);  d lambda/d nu = E (1 + 2 nu^2) / (a b)^2
   nu_bar += -mu_bar * E / (Real(2) * a * a) + lambda_bar * E * (Real(1) + Real(2) * nu * nu) / (a * a * b * b);
 }
+
+// ---- the lame op: (E, nu) -> (lambda, mu), once per batch item ----
+
+template <class Real>
+SSC_HD inline void lame(int, const PartContext<Real>&, const Real* youngs_modulus, const Real* poisson_ratio, Real* lambda,
+                        Real* mu) {
+  lame_from_young(youngs_modulus[0], poisson_ratio[0], lambda[0], mu[0]);
+}
+
+template <class Real>
+SSC_HD inline void adj_lame(int, const PartContext<Real>&, const Real* youngs_modulus, const Real* poisson_ratio,
+                            const Real* lambda_bar, const Real* mu_bar, Real* youngs_modulus_bar, Real* poisson_ratio_bar) {
+  adj_lame_from_young(youngs_modulus[0], poisson_ratio[0], lambda_bar[0], mu_bar[0], youngs_modulus_bar[0],
+                      poisson_ratio_bar[0]);
+}
+
+#ifdef SSC_OP_SPECS
+inline OpSpec lame_spec() {
+  OpSpec s;
+  s.name = "lame";
+  s.domain = Domain::Scalar;
+  s.slots = {in("youngs_modulus"), in("poisson_ratio"), out("lambda"), out("mu")};
+  s.forward = {part("lame", Extent::One, SSC_PART(lame), {"youngs_modulus", "poisson_ratio", "lambda", "mu"})};
+  s.adjoint = {part("lame", Extent::One, SSC_ADJOINT_PART(adj_lame),
+                    {"youngs_modulus", "poisson_ratio", "d_lambda", "d_mu", "d_youngs_modulus", "d_poisson_ratio"})};
+  return s;
+}
+#endif
 
 }  // namespace ops
 }  // namespace ssc

@@ -2,6 +2,7 @@
 // (8 x 3 Reals per cell); nodes then sum the corners that touch them through a fixed,
 // ascending incidence list. No atomics, so the sum order (and the result) never changes.
 #pragma once
+#include "ops/part.h"
 #include "ops/ssc_math.h"
 
 namespace ssc {
@@ -33,6 +34,21 @@ SSC_HD inline Vec3<Real> gather_point_sum(const Real* point_values, const Real* 
 template <class Real>
 SSC_HD inline void load_cell_corners(const Real* nodal, const int* cell_nodes, int cell, Vec3<Real>* out) {
   for (int c = 0; c < 8; ++c) out[c] = load3(nodal, cell_nodes[8 * cell + c]);
+}
+
+// ---- the engine's gather parts (graph/op_spec.h): node i adds what its corners or its
+// contact points hold (the adjoint of an element-to-node or point-to-node transfer) ----
+
+template <class Real>
+SSC_HD inline void add_corner_sum(int i, const PartContext<Real>&, const Real* corner_values, const int* node_cell_offset,
+                                  const int* node_cell_entry, Real* node_values) {
+  add3(node_values, i, gather_corner_sum(corner_values, node_cell_offset, node_cell_entry, i));
+}
+
+template <class Real>
+SSC_HD inline void add_point_sum(int i, const PartContext<Real>&, const Real* point_values, const Real* point_t,
+                                 const int* node_point_offset, const int* node_point_entry, Real* node_values) {
+  add3(node_values, i, gather_point_sum(point_values, point_t, node_point_offset, node_point_entry, i));
 }
 
 }  // namespace ops

@@ -3,7 +3,14 @@
 //   b = a_m M u- + b_k K u- + M v- / theta + dt f,             b_k = beta - (1-theta) dt
 //   v = (u - u-)/(theta dt) - (1-theta)/theta v-
 // with Rayleigh damping D = alpha M + beta K and the lumped mass M (one value per node).
+// Ops with a velocity-dependent force f(v) ~ f(v-) - C (v - v-) whose Jacobian -C is
+// node-local (friction) hand the engine C as a symmetric 3x3 per node ("damping", 6 values:
+// xx yy zz xy xz yz); the theta-scheme then reads
+//   (A + C) u = b + dt f(v-) + C (u- + dt v-),
+// since theta dt (v - v-) = u - u- - dt v-.
 #pragma once
+#include "ops/gather.h"
+#include "ops/part.h"
 #include "ops/ssc_math.h"
 
 namespace ssc {
@@ -94,6 +101,150 @@ SSC_HD inline void adj_newmark_velocity(const NewmarkCoefficients<Real>& c, Vec3
   u_prev_bar -= s * v_bar;
   v_prev_bar -= q * v_bar;
 }
+
+// ---- node-local symmetric 3x3 matrices, 6 values a node (xx yy zz xy xz yz) ----
+
+template <class Real>
+SSC_HD inline Vec3<Real> sym3_apply(const Real* s, int i, Vec3<Real> p) {
+  const Real* m = s + 6 * i;
+  return make_vec3(m[0] * p.x + m[3] * p.y + m[4] * p.z, m[3] * p.x + m[1] * p.y + m[5] * p.z,
+                   m[4] * p.x + m[5] * p.y + m[2] * p.z);
+}
+
+// The cotangent of the stored values of S for y = S p and the cotangent y_bar.
+template <class Real>
+SSC_HD inline void adj_sym3_apply(Real* s_bar, int i, Vec3<Real> p, Vec3<Real> y_bar) {
+  Real* m = s_bar + 6 * i;
+  m[0] += y_bar.x * p.x;
+  m[1] += y_bar.y * p.y;
+  m[2] += y_bar.z * p.z;
+  m[3] += y_bar.x * p.y + y_bar.y * p.x;
+  m[4] += y_bar.x * p.z + y_bar.z * p.x;
+  m[5] += y_bar.y * p.z + y_bar.z * p.y;
+}
+
+// ---- the newmark_rhs op: b at every node, from K u- gathered at the node's corners ----
+
+template <class Real>
+SSC_HD inline void newmark_rhs_node(int i, const PartContext<Real>&, const Real* dt, const Real* theta,
+                                    const Real* mass_damping, const Real* stiffness_damping, const Real* ku_corner,
+                                    const int* node_cell_offset, const int* node_cell_entry, const Real* mass,
+                                    const Real* u_prev, const Real* v_prev, const Real* force, const Real* damping,
+                                    Real* rhs) {
+  const NewmarkCoefficients<Real> c = newmark_coefficients(dt[0], theta[0], mass_damping[0], stiffness_damping[0]);
+  const Vec3<Real> kui = gather_corner_sum(ku_corner, node_cell_offset, node_cell_entry, i);
+  Vec3<Real> r = newmark_rhs(c, mass[i], load3(u_prev, i), load3(v_prev, i), kui, load3(force, i));
+  if (damping) r += sym3_apply(damping, i, load3(u_prev, i) + c.dt * load3(v_prev, i));
+  store3(rhs, i, r);
+}
+
+// The corners' share of (K u-)'s cotangent: b_k times their node's right-hand side cotangent.
+template <class Real>
+SSC_HD inline void adj_newmark_rhs_corners(int i, const PartContext<Real>&, const Real* dt, const Real* theta,
+                                           const Real* mass_damping, const Real* stiffness_damping, const Real* rhs_bar,
+                                           const int* cell_nodes, Real* ku_corner_bar) {
+  const NewmarkCoefficients<Real> c = newmark_coefficients(dt[0], theta[0], mass_damping[0], stiffness_damping[0]);
+  for (int k = 0; k < 8; ++k) add3(ku_corner_bar, 8 * i + k, c.b_k * load3(rhs_bar, cell_nodes[8 * i + k]));
+}
+
+// The node's cotangents and its shares of the coefficients' (a_m, b_k; double, 2 a node).
+template <class Real>
+SSC_HD inline void adj_newmark_rhs_node(int i, const PartContext<Real>&, const Real* dt, const Real* theta,
+                                        const Real* mass_damping, const Real* stiffness_damping, const Real* mass,
+                                        const Real* u_prev, const Real* v_prev, const Real* ku_corner,
+                                        const int* node_cell_offset, const int* node_cell_entry, const Real* damping,
+                                        const Real* rhs_bar, Real* mass_bar, Real* u_prev_bar, Real* v_prev_bar,
+                                        Real* force_bar, Real* damping_bar, double* coefficient_bar_share) {
+  const NewmarkCoefficients<Real> c = newmark_coefficients(dt[0], theta[0], mass_damping[0], stiffness_damping[0]);
+  const Vec3<Real> kui = gather_corner_sum(ku_corner, node_cell_offset, node_cell_entry, i);
+  Vec3<Real> ub = load3(u_prev_bar, i), vb = load3(v_prev_bar, i), fb = load3(force_bar, i);
+  Vec3<Real> kb = zero3<Real>();  // the corners' share: adj_newmark_rhs_corners
+  NewmarkCoefficientBars<Real> cb;
+  const Vec3<Real> rb = load3(rhs_bar, i);
+  adj_newmark_rhs(c, mass[i], load3(u_prev, i), load3(v_prev, i), kui, rb, mass_bar[i], ub, vb, kb, fb, cb);
+  if (damping) {
+    const Vec3<Real> cr = sym3_apply(damping, i, rb);  // C is symmetric
+    ub += cr;
+    vb += c.dt * cr;
+    adj_sym3_apply(damping_bar, i, load3(u_prev, i) + c.dt * load3(v_prev, i), rb);
+  }
+  store3(u_prev_bar, i, ub);
+  store3(v_prev_bar, i, vb);
+  store3(force_bar, i, fb);
+  coefficient_bar_share[2 * i] = double(cb.a_m);
+  coefficient_bar_share[2 * i + 1] = double(cb.b_k);
+}
+
+// ---- the velocity_update op ----
+
+template <class Real>
+SSC_HD inline void velocity_update_node(int i, const PartContext<Real>&, const Real* u, const Real* u_prev,
+                                        const Real* v_prev, const Real* dt, const Real* theta, Real* v) {
+  const NewmarkCoefficients<Real> c = newmark_coefficients(dt[0], theta[0], Real(0), Real(0));
+  store3(v, i, newmark_velocity(c, load3(u, i), load3(u_prev, i), load3(v_prev, i)));
+}
+
+template <class Real>
+SSC_HD inline void adj_velocity_update_node(int i, const PartContext<Real>&, const Real* dt, const Real* theta,
+                                            const Real* v_bar, Real* u_bar, Real* u_prev_bar, Real* v_prev_bar) {
+  const NewmarkCoefficients<Real> c = newmark_coefficients(dt[0], theta[0], Real(0), Real(0));
+  Vec3<Real> ub = load3(u_bar, i), upb = load3(u_prev_bar, i), vpb = load3(v_prev_bar, i);
+  adj_newmark_velocity(c, load3(v_bar, i), ub, upb, vpb);
+  store3(u_bar, i, ub);
+  store3(u_prev_bar, i, upb);
+  store3(v_prev_bar, i, vpb);
+}
+
+#ifdef SSC_OP_SPECS
+inline OpSpec newmark_rhs_spec() {
+  OpSpec s;
+  s.name = "newmark_rhs";
+  s.domain = Domain::Node;
+  s.slots = {in("ku_corner", Access::Gather), in("mass"), in("u_prev"), in("v_prev"), in("force"),
+             optional_in("damping"), constant_in("dt"), constant_in("theta"), in("mass_damping"),
+             in("stiffness_damping"), out("rhs")};
+  s.scratch = {{"red", Domain::Node, 2}};
+  s.forward = {part("newmark_rhs", Extent::Node, SSC_PART(newmark_rhs_node),
+                    {"dt", "theta", "mass_damping", "stiffness_damping", "ku_corner^", "#node_cell_offset",
+                     "#node_cell_entry", "mass", "u_prev", "v_prev", "force", "damping", "rhs"})};
+  s.adjoint = {part("newmark_rhs_corners", Extent::Cell, SSC_ADJOINT_PART(adj_newmark_rhs_corners),
+                    {"dt", "theta", "mass_damping", "stiffness_damping", "d_rhs^", "#cell_nodes", "d_ku_corner"}),
+               part("newmark_rhs", Extent::Node, SSC_ADJOINT_PART(adj_newmark_rhs_node),
+                    {"dt", "theta", "mass_damping", "stiffness_damping", "mass", "u_prev", "v_prev", "ku_corner^",
+                     "#node_cell_offset", "#node_cell_entry", "damping", "d_rhs", "d_mass", "d_u_prev", "d_v_prev",
+                     "d_force", "d_damping", "$red"}),
+               reduction("newmark_rhs_reduce", {"$red"}, {"d_mass_damping", "d_stiffness_damping"})};
+  return s;
+}
+
+// (a_m M + a_k R K R^T + C) u = rhs on the free nodes: the engine's Jacobi-PCG schedule
+// "newmark_pcg" (runtime/solvers.cpp, codegen/solver_snippets.cpp); its adjoint solves the
+// same system for the cotangent and hands the parameters -mu_adj^T dA/dp u.
+inline OpSpec newmark_solve_spec() {
+  OpSpec s;
+  s.name = "newmark_solve";
+  s.domain = Domain::Node;
+  s.solver = "newmark_pcg";
+  s.slots = {in("rotation", Access::Opaque), in("lambda"), in("mu"), in("mass", Access::Opaque), in("rhs", Access::Opaque),
+             constant_in("u_prev", Access::Opaque), constant_in("v_prev", Access::Opaque),
+             constant_in("fixed", Access::Opaque), optional_in("damping", Access::Opaque), constant_in("dt"),
+             constant_in("theta"), in("mass_damping"), in("stiffness_damping"), out("u"), out("cg_iterations")};
+  s.slots.back().differentiable = false;
+  return s;
+}
+
+inline OpSpec velocity_update_spec() {
+  OpSpec s;
+  s.name = "velocity_update";
+  s.domain = Domain::Node;
+  s.slots = {in("u"), in("u_prev"), in("v_prev"), constant_in("dt"), constant_in("theta"), out("v")};
+  s.forward = {part("velocity_update", Extent::Node, SSC_PART(velocity_update_node),
+                    {"u", "u_prev", "v_prev", "dt", "theta", "v"})};
+  s.adjoint = {part("velocity_update", Extent::Node, SSC_ADJOINT_PART(adj_velocity_update_node),
+                    {"dt", "theta", "d_v", "d_u", "d_u_prev", "d_v_prev"})};
+  return s;
+}
+#endif
 
 }  // namespace ops
 }  // namespace ssc

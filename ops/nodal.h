@@ -2,6 +2,8 @@
 // of its cut-cell corner volumes) and its force (gravity on that mass plus the gathered
 // elastic corner forces and contact point forces, ops/gather.h).
 #pragma once
+#include "ops/gather.h"
+#include "ops/part.h"
 #include "ops/ssc_math.h"
 
 namespace ssc {
@@ -34,6 +36,96 @@ SSC_HD inline void adj_node_force(Real mass, Vec3<Real> gravity, Vec3<Real> forc
   gravity_bar += mass * force_bar;
   sum_bar += force_bar;
 }
+
+// ---- the node_mass op ----
+
+template <class Real>
+SSC_HD inline void node_mass_node(int i, const PartContext<Real>&, const Real* density, const Real* node_volume, Real* mass) {
+  mass[i] = node_mass(density[0], node_volume[i]);
+}
+
+// The node's share of the density's cotangent, in double (summed by a reduction part).
+template <class Real>
+SSC_HD inline void adj_node_mass_node(int i, const PartContext<Real>&, const Real* mass_bar, const Real* node_volume,
+                                      double* density_bar_share) {
+  double s = 0;
+  adj_node_mass(double(node_volume[i]), double(mass_bar[i]), s);
+  density_bar_share[i] = s;
+}
+
+// ---- the node_force op: gravity plus the gathered corner and (optional) contact point forces ----
+
+template <class Real>
+SSC_HD inline void node_force_node(int i, const PartContext<Real>&, const Real* corner_force, const int* node_cell_offset,
+                                   const int* node_cell_entry, const Real* point_force, const Real* point_t,
+                                   const int* node_point_offset, const int* node_point_entry, const Real* mass,
+                                   const Real* gravity, Real* force) {
+  const Vec3<Real> corners = gather_corner_sum(corner_force, node_cell_offset, node_cell_entry, i);
+  const Vec3<Real> points =
+      point_force ? gather_point_sum(point_force, point_t, node_point_offset, node_point_entry, i) : zero3<Real>();
+  store3(force, i, node_force(mass[i], load3(gravity, 0), corners, points));
+}
+
+// The corners' cotangents: each corner takes its node's force cotangent.
+template <class Real>
+SSC_HD inline void adj_node_force_corners(int i, const PartContext<Real>&, const Real* force_bar, const int* cell_nodes,
+                                          Real* corner_force_bar) {
+  for (int c = 0; c < 8; ++c) add3(corner_force_bar, 8 * i + c, load3(force_bar, cell_nodes[8 * i + c]));
+}
+
+// The contact points' cotangents: (1 - t, t) of their edge nodes' force cotangents.
+template <class Real>
+SSC_HD inline void adj_node_force_points(int i, const PartContext<Real>&, const Real* force_bar, const int* point_nodes,
+                                         const Real* point_t, Real* point_force_bar) {
+  const Real t = point_t[i];
+  add3(point_force_bar, i,
+       (Real(1) - t) * load3(force_bar, point_nodes[2 * i]) + t * load3(force_bar, point_nodes[2 * i + 1]));
+}
+
+// The mass's cotangent and the node's share of gravity's (double, summed by a reduction).
+template <class Real>
+SSC_HD inline void adj_node_force_node(int i, const PartContext<Real>&, const Real* mass, const Real* gravity,
+                                       const Real* force_bar, Real* mass_bar, double* gravity_bar_share) {
+  Vec3<Real> gravity_bar = zero3<Real>(), sum_bar = zero3<Real>();
+  adj_node_force(mass[i], load3(gravity, 0), load3(force_bar, i), mass_bar[i], gravity_bar, sum_bar);
+  for (int k = 0; k < 3; ++k) gravity_bar_share[3 * i + k] = double(gravity_bar[k]);
+}
+
+#ifdef SSC_OP_SPECS
+inline OpSpec node_mass_spec() {
+  OpSpec s;
+  s.name = "node_mass";
+  s.domain = Domain::Node;
+  s.slots = {in("density"), out("mass")};
+  s.scratch = {{"red", Domain::Node, 1}};
+  s.forward = {part("node_mass", Extent::Node, SSC_PART(node_mass_node), {"density", "#node_volume", "mass"})};
+  s.adjoint = {part("node_mass", Extent::Node, SSC_ADJOINT_PART(adj_node_mass_node), {"d_mass", "#node_volume", "$red"}),
+               reduction("node_mass_reduce", {"$red"}, {"d_density"})};
+  return s;
+}
+
+inline OpSpec node_force_spec() {
+  OpSpec s;
+  s.name = "node_force";
+  s.domain = Domain::Node;
+  s.slots = {in("corner_force", Access::Gather), optional_in("point_force", Access::Gather), in("mass"), in("gravity"),
+             out("force")};
+  s.scratch = {{"red", Domain::Node, 3}};
+  s.forward = {part("node_force", Extent::Node, SSC_PART(node_force_node),
+                    {"corner_force^", "#node_cell_offset", "#node_cell_entry", "point_force^", "#point_t",
+                     "#node_point_offset", "#node_point_entry", "mass", "gravity", "force"})};
+  s.adjoint = {
+      part("node_force_corners", Extent::Cell, SSC_ADJOINT_PART(adj_node_force_corners),
+           {"d_force^", "#cell_nodes", "d_corner_force"}),
+      when_bound(part("node_force_points", Extent::Point, SSC_ADJOINT_PART(adj_node_force_points),
+                      {"d_force^", "#point_nodes", "#point_t", "d_point_force"}),
+                 "point_force"),
+      part("node_force", Extent::Node, SSC_ADJOINT_PART(adj_node_force_node),
+           {"mass", "gravity", "d_force", "d_mass", "$red"}),
+      reduction("node_force_reduce", {"$red"}, {"d_gravity"})};
+  return s;
+}
+#endif
 
 }  // namespace ops
 }  // namespace ssc

@@ -137,40 +137,12 @@ void GpuTimestep::Impl::upload_int(const std::string& name, const std::vector<in
 }
 
 void GpuTimestep::Impl::upload_grid() {
-  const StaticArrays& g = grid;
-  upload_int("cell_nodes", g.cell_nodes);
-  upload_real("cell_weights", g.cell_volume_weights);
-  upload_real("node_volume", g.node_volume);
-  upload_real("node_rest", g.node_rest);
-  upload_int("node_cell_offset", g.node_cell_offset);
-  upload_int("node_cell_entry", g.node_cell_entry);
-  std::vector<int> pn;
-  std::vector<double> pt, pa;
-  for (const ContactPoint& p : g.contact_points) {
-    pn.push_back(p.node_a);
-    pn.push_back(p.node_b);
-    pt.push_back(p.t);
-    pa.push_back(p.area);
+  for (const NamedStaticArray& a : named_static_arrays(grid)) {
+    if (a.is_int)
+      upload_int(a.name, a.ints);
+    else
+      upload_real(a.name, a.reals);
   }
-  upload_int("point_nodes", pn);
-  upload_real("point_t", pt);
-  upload_real("point_area", pa);
-  upload_int("node_point_offset", g.node_point_offset);
-  upload_int("node_point_entry", g.node_point_entry);
-  upload_int("band_neighbors", g.band_neighbors);
-  upload_int("band_degree", g.band_degree);
-  // node <- band incidence in (band, direction) order: the adjoint extension gathers it.
-  std::vector<std::vector<int>> nb(g.node_count);
-  for (int i = 0; i < g.band_count; ++i)
-    for (int k = 0; k < 6; ++k)
-      if (g.band_neighbors[6 * i + k] <= -2) nb[-g.band_neighbors[6 * i + k] - 2].push_back(i);
-  std::vector<int> off{0}, ent;
-  for (const auto& l : nb) {
-    ent.insert(ent.end(), l.begin(), l.end());
-    off.push_back(int(ent.size()));
-  }
-  upload_int("node_band_offset", off);
-  upload_int("node_band_entry", ent);
 }
 
 void GpuTimestep::Impl::compile_and_load(const std::vector<const PlannedKernel*>& kernels) {
@@ -238,8 +210,7 @@ void GpuTimestep::Impl::setup() {
   }
   real_size = options.real == "float" ? 4 : 8;
   sizes = domain_sizes(grid);
-  for (const TensorInfo& t : graph.tensors())
-    if (t.name == "ground_planes") plane_count = t.components / 6;
+  plane_count = graph.plane_count();
 
   plan = plan_kernels(graph);
   std::vector<const PlannedKernel*> forward;

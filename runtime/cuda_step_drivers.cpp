@@ -114,7 +114,7 @@ void GpuTimestep::Impl::launch_plan(const PlannedKernel* begin, const PlannedKer
 }
 
 void GpuTimestep::Impl::solve_forward(int o) {
-  if (graph.ops()[o].kind == OpKind::NewmarkSolve)
+  if (graph.ops()[o].spec->solver == "newmark_pcg")
     newmark(o);
   else
     extension(o);
@@ -155,7 +155,7 @@ void GpuTimestep::Impl::adjoint_extension(int o) {
 }
 
 void GpuTimestep::Impl::solve_adjoint(int o) {
-  if (graph.ops()[o].kind == OpKind::NewmarkSolve)
+  if (graph.ops()[o].spec->solver == "newmark_pcg")
     adjoint_newmark(o);
   else
     adjoint_extension(o);

@@ -1,23 +1,15 @@
-// Executors of the CPU interpreter: one function per op kind binds the op's tensors and
-// loops the op body of ops/ over its domain (see interpreter.h).
+// The interpreter's forward and reverse passes over op specs (see interpreter.h).
 #include "runtime/interpreter.h"
 
 #include <fmt/format.h>
 
-#include <algorithm>
-#include <cmath>
+#include <stdexcept>
+#include <type_traits>
 
-#include "runtime/errors.h"
-#include "ops/contact.h"
-#include "ops/corotation.h"
-#include "ops/elasticity.h"
-#include "ops/gather.h"
-#include "ops/newmark.h"
-#include "ops/nodal.h"
-#include "ops/polar.h"
+#include "ops/part.h"
 #include "runtime/batch_loop.h"
-#include "runtime/cpu_kernels.h"
 #include "runtime/pcg.h"
+#include "runtime/solvers.h"
 
 namespace ssc {
 
@@ -31,27 +23,117 @@ DomainSizes domain_sizes(const StaticArrays& grid) {
 }
 
 template <class Real>
-static std::vector<Real> real_copy(const std::vector<double>& v) {
-  return std::vector<Real>(v.begin(), v.end());
-}
-
-template <class Real>
 Interpreter<Real>::Interpreter(const Graph& graph, const StaticArrays& grid, int batch, const SolverOptions& options)
     : graph_(graph),
       grid_(grid),
       options_(options),
       store_(graph, domain_sizes(grid), batch),
-      adjoint_(graph, domain_sizes(grid), batch) {
+      adjoint_(graph, domain_sizes(grid), batch),
+      sizes_(domain_sizes(grid)) {
   graph_.validate();
-  for (const ContactPoint& p : grid.contact_points) {
-    point_t_.push_back(Real(p.t));
-    point_area_.push_back(Real(p.area));
-    point_nodes_.push_back(p.node_a);
-    point_nodes_.push_back(p.node_b);
+  for (NamedStaticArray& a : named_static_arrays(grid)) {
+    if (a.is_int)
+      static_int_[a.name] = std::move(a.ints);
+    else
+      static_real_[a.name] = std::vector<Real>(a.reals.begin(), a.reals.end());
   }
-  weights_ = real_copy<Real>(grid.cell_volume_weights);
-  node_rest_ = real_copy<Real>(grid.node_rest);
+  scratch_.resize(graph.ops().size());
+  for (size_t o = 0; o < graph.ops().size(); ++o) {
+    const OpSpec& spec = *graph.ops()[o].spec;
+    for (const ScratchSpec& s : spec.scratch) {
+      Scratch& buffer = scratch_[o][s.key];
+      const int components =
+          s.components > 0 ? s.components : graph.tensor(graph.ops()[o].input(s.like_slot)).components;
+      buffer.stride = size_t(sizes_.count(s.domain)) * components;
+      buffer.is_double = spec.scratch_type(s.key) == "double";
+      if (buffer.is_double)
+        buffer.dbl.assign(buffer.stride * batch, 0.0);
+      else
+        buffer.real.assign(buffer.stride * batch, Real(0));
+    }
+  }
   extension_adjoint_guess_.assign(batch, {});
+}
+
+template <class Real>
+int Interpreter<Real>::extent_count(Extent e) const {
+  switch (e) {
+    case Extent::One: return 1;
+    case Extent::Cell: return sizes_.cell;
+    case Extent::Node: return sizes_.node;
+    case Extent::Point: return sizes_.point;
+    case Extent::Band: return sizes_.band;
+    default: throw std::logic_error(fmt::format("interpreter: a part over extent {}", extent_name(e)));
+  }
+}
+
+template <class Real>
+void* Interpreter<Real>::bind(int o, const PartArg& a, int b) {
+  const OpNode& op = graph_.ops()[o];
+  switch (a.kind) {
+    case PartArg::Kind::Value:
+    case PartArg::Kind::Adjoint: {
+      if (!op.bound(a.name)) return nullptr;  // an optional slot left unbound
+      const SlotSpec* slot = op.spec->slot(a.name);
+      const int t = slot->output ? op.output(a.name) : op.input(a.name);
+      return (a.kind == PartArg::Kind::Value ? store_ : adjoint_).data(t, b);
+    }
+    case PartArg::Kind::Static:
+      if (a.type == "int") return static_int_.at(a.name).data();
+      return static_real_.at(a.name).data();
+    case PartArg::Kind::Scratch:
+      return scratch_[o].at(a.name).data(b);
+  }
+  return nullptr;
+}
+
+template <class Real>
+void Interpreter<Real>::run_reduction(int o, const PartSpec& p, int b) {
+  std::vector<double> totals;
+  for (const PartArg& a : p.args) {
+    if (a.kind != PartArg::Kind::Scratch) continue;
+    const ScratchSpec& s = graph_.ops()[o].spec->scratch_spec(a.name);
+    Scratch& buffer = scratch_[o].at(a.name);
+    const int n = sizes_.count(s.domain);
+    const int c = int(buffer.stride / std::max(1, n));
+    for (int k = 0; k < c; ++k) {
+      double sum = 0;
+      for (int e = 0; e < n; ++e) sum += buffer.is_double ? buffer.dbl[buffer.stride * b + size_t(c) * e + k]
+                                                          : double(buffer.real[buffer.stride * b + size_t(c) * e + k]);
+      totals.push_back(sum);
+    }
+  }
+  size_t next = 0;
+  for (const PartArg& a : p.args) {
+    if (a.kind != PartArg::Kind::Adjoint) continue;
+    Real* target = static_cast<Real*>(bind(o, a, b));
+    const int t = graph_.ops()[o].input(a.name);
+    for (int k = 0; k < graph_.tensor(t).components; ++k) {
+      if (next >= totals.size()) throw std::logic_error("reduction " + p.label + ": more targets than sums");
+      target[k] += Real(totals[next++]);
+    }
+  }
+  if (next != totals.size()) throw std::logic_error("reduction " + p.label + ": more sums than targets");
+}
+
+template <class Real>
+void Interpreter<Real>::run_parts(int o, const std::vector<PartSpec>& parts, int b) {
+  const OpNode& op = graph_.ops()[o];
+  const ops::PartContext<Real> cx{Real(grid_.h), sizes_.cell, sizes_.node, sizes_.point, sizes_.band,
+                                  graph_.plane_count()};
+  std::vector<void*> args;
+  for (const PartSpec& p : parts) {
+    if (!p.requires_slot.empty() && !op.bound(p.requires_slot)) continue;
+    if (p.function.name.empty()) {
+      run_reduction(o, p, b);
+      continue;
+    }
+    args.clear();
+    for (const PartArg& a : p.args) args.push_back(bind(o, a, b));
+    const PartLoop loop = std::is_same<Real, double>::value ? p.function.loop_double : p.function.loop_float;
+    const long threshold = p.extent == Extent::Cell ? kCellParallelThreshold : kParallelThreshold;
+    loop(extent_count(p.extent), &cx, args.data(), threshold);
+  }
 }
 
 template <class Real>
@@ -60,7 +142,6 @@ void Interpreter<Real>::run() {
   report_.cg_iterations.assign(B, 0);
   report_.cg_residual.assign(B, 0.0);
   report_.extension_iterations.assign(B, 0);
-  report_.degenerate_cells.assign(B, 0);
   for (const OpNode& op : graph_.ops()) execute(op);
 }
 
@@ -71,153 +152,48 @@ void Interpreter<Real>::run_op(int op) {
     report_.cg_iterations.assign(B, 0);
     report_.cg_residual.assign(B, 0.0);
     report_.extension_iterations.assign(B, 0);
-    report_.degenerate_cells.assign(B, 0);
   }
   execute(graph_.ops().at(op));
 }
 
-
 template <class Real>
 void Interpreter<Real>::execute(const OpNode& op) {
-  for_each_batch_item(batch(), [&](int b) { execute_item(op, b); });
+  const int o = int(&op - graph_.ops().data());
+  if (!op.spec->solver.empty()) {
+    const SolverSchedule<Real>& s = solver_schedule<Real>(op.spec->solver);
+    for_each_batch_item(batch(), [&](int b) { s.forward(*this, op, b); });
+    return;
+  }
+  for_each_batch_item(batch(), [&](int b) { run_parts(o, op.spec->forward, b); });
 }
 
 template <class Real>
-void Interpreter<Real>::execute_item(const OpNode& op, int b) {
-  const StaticArrays& g = grid_;
-  const Real h = Real(g.h);
-  const std::vector<Real>& weights = weights_;
+void Interpreter<Real>::clear_adjoints(bool including_inputs) {
+  if (including_inputs) extension_adjoint_guess_.assign(batch(), {});  // a new backward pass
+  for (size_t t = 0; t < graph_.tensors().size(); ++t)
+    if (including_inputs || graph_.tensor(int(t)).role != TensorInfo::Role::Input)
+      std::fill(adjoint_.all(int(t)).begin(), adjoint_.all(int(t)).end(), Real(0));
+}
 
-  Binder<Real> a{store_, op, b};
-  switch (op.kind) {
-    case OpKind::Lame: {
-      Real lambda, mu;
-      ops::lame_from_young(a.scalar("youngs_modulus"), a.scalar("poisson_ratio"), lambda, mu);
-      a.out("lambda")[0] = lambda;
-      a.out("mu")[0] = mu;
-      break;
-    }
-    case OpKind::NodeMass: {
-      const Real rho = a.scalar("density");
-      Real* m = a.out("mass");
-      for (int i = 0; i < g.node_count; ++i) m[i] = ops::node_mass(rho, Real(g.node_volume[i]));
-      break;
-    }
-    case OpKind::Corotation: {
-      const Real* u = a.in("u_prev");
-      Real* rot = a.out("rotation");
-      Real* status = a.out("polar_status");
-      int degenerate = 0;
-#pragma omp parallel for schedule(static) reduction(+ : degenerate) if (g.cell_count >= kCellParallelThreshold)
-      for (int e = 0; e < g.cell_count; ++e)
-        degenerate += ops::corotation_cell(e, u, g.cell_nodes.data(), h, rot, status) == ops::kPolarDegenerate;
-      report_.degenerate_cells[b] = degenerate;
-      break;
-    }
-    case OpKind::CorotationForce: {
-      const Real* rot = a.in("rotation");
-      const Real lambda = a.scalar("lambda"), mu = a.scalar("mu");
-      Real* f = a.out("corner_force");
-#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
-      for (int e = 0; e < g.cell_count; ++e) ops::corotation_force_cell(e, rot, weights.data(), lambda, mu, h, f);
-      break;
-    }
-    case OpKind::ContactForce: {
-      const Real* u = a.in("u_prev");
-      const Real* v = a.in("v_prev");
-      ops::GroundPlane<Real> planes[ops::kMaxGroundPlanes];
-      const int plane_count = load_ground_planes(store_, op, b, planes);
-      const Real dt = a.scalar("dt"), theta = a.scalar("theta");
-      Real* f = a.out("point_force");
-      const int n = int(g.contact_points.size());
-#pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
-      for (int p = 0; p < n; ++p)
-        store3(f, p, ops::contact_point_force(p, point_nodes_.data(), point_t_.data(), point_area_.data(), node_rest_.data(),
-                                              u, v, planes, plane_count, dt, theta));
-      break;
-    }
-    case OpKind::NodeForce: {
-      const Real* corner = a.in("corner_force");
-      const Real* point = a.has_input("point_force") ? a.in("point_force") : nullptr;
-      const Real* m = a.in("mass");
-      const Vec3<Real> grav = load3(a.in("gravity"), 0);
-      Real* f = a.out("force");
-#pragma omp parallel for schedule(static) if (g.node_count >= kParallelThreshold)
-      for (int i = 0; i < g.node_count; ++i) {
-        const Vec3<Real> corners = ops::gather_corner_sum(corner, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
-        const Vec3<Real> points =
-            point ? ops::gather_point_sum(point, point_t_.data(), g.node_point_offset.data(), g.node_point_entry.data(), i)
-                  : zero3<Real>();
-        store3(f, i, ops::node_force(m[i], grav, corners, points));
-      }
-      break;
-    }
-    case OpKind::StiffnessApply:
-      stiffness_apply_cells(g, a.in("rotation"), weights.data(), a.scalar("lambda"), a.scalar("mu"), a.in("u_prev"),
-                            a.out("ku_corner"));
-      break;
-    case OpKind::NewmarkRhs: {
-      const auto c = ops::newmark_coefficients(a.scalar("dt"), a.scalar("theta"), a.scalar("mass_damping"),
-                                               a.scalar("stiffness_damping"));
-      const Real* ku = a.in("ku_corner");
-      const Real *m = a.in("mass"), *u = a.in("u_prev"), *v = a.in("v_prev"), *f = a.in("force");
-      Real* rhs = a.out("rhs");
-#pragma omp parallel for schedule(static) if (g.node_count >= kParallelThreshold)
-      for (int i = 0; i < g.node_count; ++i) {
-        const Vec3<Real> kui = ops::gather_corner_sum(ku, g.node_cell_offset.data(), g.node_cell_entry.data(), i);
-        store3(rhs, i, ops::newmark_rhs(c, m[i], load3(u, i), load3(v, i), kui, load3(f, i)));
-      }
-      break;
-    }
-    case OpKind::NewmarkSolve: {
-      const auto c = ops::newmark_coefficients(a.scalar("dt"), a.scalar("theta"), a.scalar("mass_damping"),
-                                               a.scalar("stiffness_damping"));
-      const Real *u_prev = a.in("u_prev"), *v_prev = a.in("v_prev"), *fixed = a.in("fixed");
-      Real* u = a.out("u");
-      for (int i = 0; i < 3 * g.node_count; ++i) u[i] = fixed[i / 3] != Real(0) ? Real(0) : u_prev[i] + c.dt * v_prev[i];
-      const NewmarkSystem<Real> system{g, weights, a.in("rotation"), a.scalar("lambda"), a.scalar("mu"), a.in("mass"), fixed, c};
-      const PcgResult r = system.solve(a.in("rhs"), u, options_.cg_tolerance, options_.cg_max_iterations);
-      report_.cg_iterations[b] = r.iterations;
-      report_.cg_residual[b] = r.relative_residual;
-      a.out("cg_iterations")[0] = Real(r.iterations);
-      if (!r.converged)
-        throw SimulationError(fmt::format(
-            "the time-step solve did not converge (batch item {}): relative residual {:.3g} after {} CG "
-            "iterations (tolerance {:.3g}); the simulation is probably unstable: lower time.dt, or raise "
-            "solver.max_iterations",
-            b, r.relative_residual, r.iterations, options_.cg_tolerance));
-      break;
-    }
-    case OpKind::VelocityUpdate: {
-      const auto c = ops::newmark_coefficients(a.scalar("dt"), a.scalar("theta"), Real(0), Real(0));
-      const Real *u = a.in("u"), *u_prev = a.in("u_prev"), *v_prev = a.in("v_prev");
-      Real* v = a.out("v");
-      for (int i = 0; i < g.node_count; ++i)
-        store3(v, i, ops::newmark_velocity(c, load3(u, i), load3(u_prev, i), load3(v_prev, i)));
-      break;
-    }
-    case OpKind::ExtensionSolve: {
-      const Real* u = a.in("u");
-      Real* x = a.out("band_u");
-      std::vector<Real> rhs(3 * size_t(g.band_count));
-      for (int i = 0; i < g.band_count; ++i) {
-        Vec3<Real> s = zero3<Real>();
-        for (int d = 0; d < 6; ++d) {
-          const int nb = g.band_neighbors[6 * i + d];
-          if (nb <= -2) s += load3(u, -nb - 2);
-        }
-        store3(rhs.data(), i, s);
-      }
-      std::copy_n(a.in("band_guess"), rhs.size(), x);
-      const PcgResult r = solve_band_laplacian(g, rhs.data(), x, options_.extension_tolerance, options_.extension_max_iterations);
-      report_.extension_iterations[b] = r.iterations;
-      if (!r.converged)
-        throw SimulationError(fmt::format("the displacement extension did not converge (batch item {}): relative "
-                                          "residual {:.3g} after {} iterations",
-                                          b, r.relative_residual, r.iterations));
-      break;
-    }
+template <class Real>
+void Interpreter<Real>::run_adjoint() {
+  for (auto it = graph_.ops().rbegin(); it != graph_.ops().rend(); ++it) execute_adjoint(*it);
+}
+
+template <class Real>
+void Interpreter<Real>::run_op_adjoint(int op) {
+  execute_adjoint(graph_.ops().at(op));
+}
+
+template <class Real>
+void Interpreter<Real>::execute_adjoint(const OpNode& op) {
+  const int o = int(&op - graph_.ops().data());
+  if (!op.spec->solver.empty()) {
+    const SolverSchedule<Real>& s = solver_schedule<Real>(op.spec->solver);
+    for_each_batch_item(batch(), [&](int b) { s.adjoint(*this, op, b); });
+    return;
   }
+  for_each_batch_item(batch(), [&](int b) { run_parts(o, op.spec->adjoint, b); });
 }
 
 template class Interpreter<double>;

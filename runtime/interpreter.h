@@ -1,8 +1,14 @@
-// The CPU interpreter: runs a graph's ops in order, each op body (ops/) looped over its
-// domain for every batch item, in double (the reference) or float. Loops over a domain
-// are split across threads with OpenMP; every index writes only its own outputs, and
-// all sums are gathers or fixed-order reductions, so results are bitwise reproducible.
+// The CPU interpreter: runs a graph's ops in order for every batch item, in double (the
+// reference) or float. It knows no op: it walks each op's spec (graph/op_spec.h), binds the
+// arguments of every part (tensors, cotangents, static arrays, scratch buffers) and runs the
+// part's function of ops/ over its extent; reductions are fixed-order sums, and ops with an
+// implicit solve run the engine's solver schedule their spec names (runtime/solvers.h).
+// Loops over a domain are split across threads with OpenMP; every index writes only its own
+// outputs, and all sums are gathers or fixed-order reductions, so results are bitwise
+// reproducible.
 #pragma once
+#include <map>
+#include <string>
 #include <vector>
 
 #include "graph/graph.h"
@@ -23,7 +29,6 @@ struct RunReport {
   std::vector<int> cg_iterations;
   std::vector<double> cg_residual;
   std::vector<int> extension_iterations;
-  std::vector<int> degenerate_cells;  // cells whose rotation fell back to identity
 };
 
 DomainSizes domain_sizes(const StaticArrays& grid);
@@ -57,11 +62,26 @@ class Interpreter {
   void run_adjoint();
   void run_op_adjoint(int op);
 
+ // ---- for the solver schedules (runtime/solvers.cpp) ----
+  const Real* static_real(const std::string& name) const { return static_real_.at(name).data(); }
+  const std::vector<Real>& static_real_vector(const std::string& name) const { return static_real_.at(name); }
+  RunReport& mutable_report() { return report_; }
+  std::vector<Real>& extension_adjoint_guess(int b) { return extension_adjoint_guess_[b]; }
+
  private:
+  struct Scratch {
+    bool is_double = false;
+    size_t stride = 0;  // per batch item
+    std::vector<Real> real;
+    std::vector<double> dbl;
+    void* data(int b) { return is_double ? static_cast<void*>(dbl.data() + stride * b) : real.data() + stride * b; }
+  };
   void execute(const OpNode& op);
-  void execute_item(const OpNode& op, int b);
   void execute_adjoint(const OpNode& op);
-  void execute_adjoint_item(const OpNode& op, int b);
+  void run_parts(int op, const std::vector<PartSpec>& parts, int b);
+  void run_reduction(int op, const PartSpec& part, int b);
+  void* bind(int op, const PartArg& a, int b);
+  int extent_count(Extent e) const;
 
   const Graph& graph_;
   const StaticArrays& grid_;
@@ -69,11 +89,10 @@ class Interpreter {
   TensorStore<Real> store_;
   TensorStore<Real> adjoint_;
   RunReport report_;
-  std::vector<Real> point_t_;  // contact point edge parameters, in Real
-  std::vector<Real> point_area_;   // contact point surface shares, in Real
-  std::vector<int> point_nodes_;   // contact point edge nodes, 2 per point
-  std::vector<Real> weights_;    // cut-cell volume weights, in Real
-  std::vector<Real> node_rest_;  // rest positions of the active nodes, in Real
+  DomainSizes sizes_;
+  std::map<std::string, std::vector<Real>> static_real_;  // the real static arrays, in Real
+  std::map<std::string, std::vector<int>> static_int_;
+  std::vector<std::map<std::string, Scratch>> scratch_;  // per op, by key
   std::vector<std::vector<Real>> extension_adjoint_guess_;  // per batch item, warm start
 };
 

@@ -3,6 +3,7 @@
 // deterministic gather, the contact points and the band's neighbour lists. The model's grid
 // (models/grid/sim_grid.h) builds them; the engine (runtime/, codegen/) sees only this.
 #pragma once
+#include <string>
 #include <vector>
 
 namespace ssc {
@@ -34,5 +35,16 @@ struct StaticArrays {
   std::vector<int> band_neighbors;          // 6 per band node: band id >= 0, -(active id) - 2, or -1
   std::vector<int> band_degree;             // active + band neighbours
 };
+
+// The arrays as the ops' parts name them ("#cell_nodes" in a spec reads cell_nodes), each
+// either int or real; the contact points' fields as arrays of their own, and the node <-
+// band incidence (in band, direction order) that the adjoint extension gathers.
+struct NamedStaticArray {
+  std::string name;
+  bool is_int = false;
+  std::vector<int> ints;
+  std::vector<double> reals;
+};
+std::vector<NamedStaticArray> named_static_arrays(const StaticArrays& g);
 
 }  // namespace ssc

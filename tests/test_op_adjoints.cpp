@@ -3,7 +3,7 @@
 //
 // OpAdjoint*: for every op with an adj_ function, on random physically sensible inputs
 // and several seeds, in double:
-//   - dot-product test: the forward body instantiated with Dual<double> (tests/dual.h),
+//   - dot-product test: the forward body instantiated with Dual<double> (graph/dual.h),
 //     seeded with a random direction x_dot on every differentiable input, gives J x_dot;
 //     the adj_ function gives J^T y_bar for a random y_bar; <J x_dot, y_bar> must equal
 //     <x_dot, J^T y_bar> (1e-12 relative; 1e-10 for the trilinear inverse, whose Dual
@@ -39,7 +39,7 @@
 #include "ops/polar.h"
 #include "ops/ssc_math.h"
 #include "ops/trilinear.h"
-#include "tests/dual.h"
+#include "graph/dual.h"
 
 namespace ssc {
 namespace {

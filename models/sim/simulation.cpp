@@ -68,6 +68,14 @@ void Simulation::use_gpu(const std::string& real) {
   kept_.clear();  // the old backend's snapshots went with it
 }
 
+int Simulation::degenerate_cells(int b) const {
+  const int t = graph_.graph.find_tensor("polar_status");
+  const double* status = interpreter_->store().data(t, b);
+  int n = 0;
+  for (int e = 0; e < grid_.cell_count; ++e) n += status[e] == double(ops::kPolarDegenerate);
+  return n;
+}
+
 int Simulation::last_cg_iterations(int b) const { return backend_->cg_iterations().at(b); }
 
 void Simulation::set_parameters(int b, const PhysicalParameters& p) {

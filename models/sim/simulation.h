@@ -111,6 +111,8 @@ class Simulation {
 
   Interpreter<double>& interpreter() { return *interpreter_; }
   const RunReport& last_report() const { return interpreter_->report(); }
+  // Cells whose rotation fell back to the identity in the last CPU step of batch item b.
+  int degenerate_cells(int b) const;
   // CG iterations of the last step of batch item b, on whichever device ran it.
   int last_cg_iterations(int b) const;
   const SimGrid& grid() const { return grid_; }

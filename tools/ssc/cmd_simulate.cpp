@@ -52,7 +52,7 @@ nlohmann::json frame_record(const Simulation& sim, int frame, const std::vector<
   f["gravitational_energy"] = sim.gravitational_energy(0);
   f["contact_energy"] = sim.contact_energy(0);
   f["cg_iterations"] = frame == 0 ? 0 : sim.last_cg_iterations(0);
-  if (!sim.on_gpu()) f["degenerate_cells"] = frame == 0 ? 0 : sim.last_report().degenerate_cells[0];
+  if (!sim.on_gpu()) f["degenerate_cells"] = frame == 0 ? 0 : sim.degenerate_cells(0);
   nlohmann::json p = nlohmann::json::array();
   for (const Eigen::Vector3d& x : probes) p.push_back(vec_json(sim.probe(0, x)));
   f["probes"] = p;

@@ -1,0 +1,280 @@
+// The interpreter's solver schedules (see solvers.h).
+#include "runtime/solvers.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "ops/corotation.h"
+#include "ops/elasticity.h"
+#include "ops/gather.h"
+#include "ops/newmark.h"
+#include "runtime/errors.h"
+#include "runtime/pcg.h"
+
+namespace ssc {
+namespace {
+
+// The slots of one op for batch item b: values and cotangents by name.
+template <class Real>
+struct Slots {
+  Interpreter<Real>& in;
+  const OpNode& op;
+  int b;
+  const Real* value(const char* slot) const {
+    const SlotSpec* s = op.spec->slot(slot);
+    return in.store().data(s->output ? op.output(slot) : op.input(slot), b);
+  }
+  Real* out(const char* slot) const { return in.store().data(op.output(slot), b); }
+  Real* bar(const char* slot) const {
+    const SlotSpec* s = op.spec->slot(slot);
+    return in.adjoint().data(s->output ? op.output(slot) : op.input(slot), b);
+  }
+  Real scalar(const char* slot) const { return value(slot)[0]; }
+  const Real* optional(const char* slot) const { return op.bound(slot) ? value(slot) : nullptr; }
+};
+
+// The SPD time-step system with fixed nodes eliminated (identity rows and columns).
+template <class Real>
+struct NewmarkSystem {
+  const StaticArrays& g;
+  const Real* weights;
+  const Real* rotation;
+  Real lambda, mu;
+  const Real* mass;
+  const Real* fixed;
+  const Real* damping;  // C, 6 per node, or nullptr
+  ops::NewmarkCoefficients<Real> c;
+
+  bool is_fixed(int i) const { return fixed[i] != Real(0); }
+
+  Vec3<Real> node_apply(int i, Vec3<Real> p, Vec3<Real> kp) const {
+    const Vec3<Real> y = ops::newmark_system_apply(c, mass[i], p, kp);
+    return damping ? y + ops::sym3_apply(damping, i, p) : y;
+  }
+
+  void cell_apply(const Real* p, Real* corner) const {
+    const ops::PartContext<Real> cx{Real(g.h), g.cell_count, g.node_count, 0, 0, 0};
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
+    for (int e = 0; e < g.cell_count; ++e)
+      ops::stiffness_apply_cell(e, cx, rotation, weights, &lambda, &mu, p, g.cell_nodes.data(), corner);
+  }
+
+  void apply(const Real* p, Real* q, std::vector<Real>& corner) const {
+    cell_apply(p, corner.data());
+#pragma omp parallel for schedule(static) if (g.node_count >= kParallelThreshold)
+    for (int i = 0; i < g.node_count; ++i) {
+      const Vec3<Real> kp = ops::gather_corner_sum(corner.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+      store3(q, i, is_fixed(i) ? load3(p, i) : node_apply(i, load3(p, i), kp));
+    }
+  }
+
+  // Solves A x = rhs (fixed entries of rhs ignored, x starts from its content).
+  PcgResult solve(const Real* rhs, Real* x, double tolerance, int max_iterations) const {
+    const Real h = Real(g.h);
+    const long n = 3L * g.node_count;
+    std::vector<Real> corner(24 * size_t(g.cell_count)), inv_diag(n), b(n);
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
+    for (int e = 0; e < g.cell_count; ++e) {
+      Vec3<Real> d[8];
+      ops::corotated_diagonal(ops::load_mat3(rotation, e), weights + 8 * e, lambda, mu, h, d);
+      for (int k = 0; k < 8; ++k) store3(corner.data(), 8 * e + k, d[k]);
+    }
+    for (int i = 0; i < g.node_count; ++i) {
+      const Vec3<Real> kd = ops::gather_corner_sum(corner.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+      Vec3<Real> d = ops::newmark_system_apply(c, mass[i], make_vec3(Real(1), Real(1), Real(1)), kd);
+      if (damping) d += make_vec3(damping[6 * i], damping[6 * i + 1], damping[6 * i + 2]);
+      for (int k = 0; k < 3; ++k) {
+        inv_diag[3 * i + k] = is_fixed(i) ? Real(1) : Real(1) / d[k];
+        b[3 * i + k] = is_fixed(i) ? Real(0) : rhs[3 * i + k];
+        if (is_fixed(i)) x[3 * i + k] = Real(0);
+      }
+    }
+    auto op = [&](const Real* p, Real* q) { apply(p, q, corner); };
+    return jacobi_pcg<Real>(n, op, inv_diag.data(), b.data(), x, tolerance, max_iterations);
+  }
+};
+
+template <class Real>
+NewmarkSystem<Real> newmark_system(Interpreter<Real>& in, const Slots<Real>& a) {
+  const auto c = ops::newmark_coefficients(a.scalar("dt"), a.scalar("theta"), a.scalar("mass_damping"),
+                                           a.scalar("stiffness_damping"));
+  return NewmarkSystem<Real>{in.grid(),          in.static_real("cell_weights"), a.value("rotation"),
+                             a.scalar("lambda"), a.scalar("mu"),                 a.value("mass"),
+                             a.value("fixed"),   a.optional("damping"),          c};
+}
+
+template <class Real>
+void newmark_forward(Interpreter<Real>& in, const OpNode& op, int b) {
+  const Slots<Real> a{in, op, b};
+  const StaticArrays& g = in.grid();
+  const NewmarkSystem<Real> system = newmark_system(in, a);
+  const Real *u_prev = a.value("u_prev"), *v_prev = a.value("v_prev"), *fixed = a.value("fixed");
+  Real* u = a.out("u");
+  for (int i = 0; i < 3 * g.node_count; ++i)
+    u[i] = fixed[i / 3] != Real(0) ? Real(0) : u_prev[i] + system.c.dt * v_prev[i];
+  const SolverOptions& o = in.options();
+  const PcgResult r = system.solve(a.value("rhs"), u, o.cg_tolerance, o.cg_max_iterations);
+  in.mutable_report().cg_iterations[b] = r.iterations;
+  in.mutable_report().cg_residual[b] = r.relative_residual;
+  a.out("cg_iterations")[0] = Real(r.iterations);
+  if (!r.converged)
+    throw SimulationError(fmt::format(
+        "the time-step solve did not converge (batch item {}): relative residual {:.3g} after {} CG "
+        "iterations (tolerance {:.3g}); the simulation is probably unstable: lower time.dt, or raise "
+        "solver.max_iterations",
+        b, r.relative_residual, r.iterations, o.cg_tolerance));
+}
+
+// Sums per-cell partial values in cell order (deterministic).
+template <class Real>
+Real ordered_sum(const std::vector<Real>& v) {
+  double s = 0;
+  for (Real x : v) s += double(x);
+  return Real(s);
+}
+
+template <class Real>
+void newmark_adjoint(Interpreter<Real>& in, const OpNode& op, int b) {
+  const Slots<Real> a{in, op, b};
+  const StaticArrays& g = in.grid();
+  const NewmarkSystem<Real> system = newmark_system(in, a);
+  const auto& c = system.c;
+  const Real h = Real(g.h);
+  const Real* weights = in.static_real("cell_weights");
+  const Real *rot = a.value("rotation"), *m = a.value("mass"), *u = a.value("u"), *fixed = a.value("fixed");
+  const Real lambda = system.lambda, mu = system.mu;
+  const long n = 3L * g.node_count;
+  // mu_adj = A^-1 u_bar (A symmetric), then rhs_bar += mu_adj and the parameters receive
+  // -d(mu_adj^T A u)/d(parameter).
+  std::vector<Real> w(n, Real(0));
+  const SolverOptions& o = in.options();
+  const PcgResult r = system.solve(a.bar("u"), w.data(), o.cg_tolerance, o.cg_max_iterations);
+  if (!r.converged)
+    throw SimulationError(fmt::format("the adjoint time-step solve did not converge (batch item {}): relative "
+                                      "residual {:.3g} after {} iterations",
+                                      b, r.relative_residual, r.iterations));
+  Real* rhs_bar = a.bar("rhs");
+  for (long i = 0; i < n; ++i) rhs_bar[i] += w[i];
+  const size_t corner_size = 24 * size_t(g.cell_count);
+  std::vector<Real> lb(g.cell_count), mb(g.cell_count), ku(corner_size);
+  Real* rot_bar = a.bar("rotation");
+#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
+  for (int e = 0; e < g.cell_count; ++e) {
+    Vec3<Real> pc[8], yb[8], pb[8], y[8];
+    ops::load_cell_corners(u, g.cell_nodes.data(), e, pc);
+    for (int k = 0; k < 8; ++k) {
+      yb[k] = (-c.a_k) * load3(w.data(), g.cell_nodes[8 * e + k]);
+      pb[k] = zero3<Real>();
+    }
+    const Mat3<Real> R = ops::load_mat3(rot, e);
+    Mat3<Real> R_bar = zero33<Real>();
+    Real l = Real(0), mm = Real(0);
+    ops::adj_corotated_apply(R, weights + 8 * e, lambda, mu, h, pc, yb, R_bar, l, mm, pb);
+    ops::add_mat3(rot_bar, e, R_bar);
+    ops::corotated_apply(R, weights + 8 * e, lambda, mu, h, pc, y);
+    for (int k = 0; k < 8; ++k) store3(ku.data(), 8 * e + k, y[k]);
+    lb[e] = l;
+    mb[e] = mm;
+  }
+  a.bar("lambda")[0] += ordered_sum(lb);
+  a.bar("mu")[0] += ordered_sum(mb);
+  Real* m_bar = a.bar("mass");
+  Real* damping_bar = system.damping ? a.bar("damping") : nullptr;
+  double alpha_bar = 0, beta_bar = 0;
+  for (int i = 0; i < g.node_count; ++i) {
+    if (fixed[i] != Real(0)) continue;
+    // The parameters' share of -mu_adj^T A u: the system's adjoint at y_bar = -mu_adj.
+    const Vec3<Real> kui = ops::gather_corner_sum(ku.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
+    Vec3<Real> ub = zero3<Real>(), kb = zero3<Real>();
+    ops::NewmarkCoefficientBars<Real> cb;
+    const Vec3<Real> y_bar = Real(-1) * load3(w.data(), i);
+    ops::adj_newmark_system_apply(c, m[i], load3(u, i), kui, y_bar, m_bar[i], ub, kb, cb);
+    if (damping_bar) ops::adj_sym3_apply(damping_bar, i, load3(u, i), y_bar);
+    alpha_bar += double(cb.a_m);
+    beta_bar += double(cb.a_k);
+  }
+  a.bar("mass_damping")[0] += Real(alpha_bar);
+  a.bar("stiffness_damping")[0] += Real(beta_bar);
+}
+
+// Solves the band Laplacian L x = rhs (3 components; x starts from its content).
+template <class Real>
+PcgResult solve_band_laplacian(const StaticArrays& g, const Real* rhs, Real* x, double tolerance, int max_iterations) {
+  const long n = 3L * g.band_count;
+  std::vector<Real> inv_diag(n);
+  for (int i = 0; i < g.band_count; ++i)
+    for (int k = 0; k < 3; ++k) inv_diag[3 * i + k] = Real(1) / Real(g.band_degree[i]);
+  auto apply = [&](const Real* p, Real* q) {
+#pragma omp parallel for schedule(static) if (g.band_count >= kParallelThreshold)
+    for (int i = 0; i < g.band_count; ++i) {
+      Vec3<Real> s = Real(g.band_degree[i]) * load3(p, i);
+      for (int d = 0; d < 6; ++d) {
+        const int nb = g.band_neighbors[6 * i + d];
+        if (nb >= 0) s -= load3(p, nb);
+      }
+      store3(q, i, s);
+    }
+  };
+  return jacobi_pcg<Real>(n, apply, inv_diag.data(), rhs, x, tolerance, max_iterations);
+}
+
+template <class Real>
+void extension_forward(Interpreter<Real>& in, const OpNode& op, int b) {
+  const Slots<Real> a{in, op, b};
+  const StaticArrays& g = in.grid();
+  const Real* u = a.value("u");
+  Real* x = a.out("band_u");
+  std::vector<Real> rhs(3 * size_t(g.band_count));
+  for (int i = 0; i < g.band_count; ++i) {
+    Vec3<Real> s = zero3<Real>();
+    for (int d = 0; d < 6; ++d) {
+      const int nb = g.band_neighbors[6 * i + d];
+      if (nb <= -2) s += load3(u, -nb - 2);
+    }
+    store3(rhs.data(), i, s);
+  }
+  std::copy_n(a.value("band_guess"), rhs.size(), x);
+  const SolverOptions& o = in.options();
+  const PcgResult r = solve_band_laplacian(g, rhs.data(), x, o.extension_tolerance, o.extension_max_iterations);
+  in.mutable_report().extension_iterations[b] = r.iterations;
+  if (!r.converged)
+    throw SimulationError(fmt::format("the displacement extension did not converge (batch item {}): relative "
+                                      "residual {:.3g} after {} iterations",
+                                      b, r.relative_residual, r.iterations));
+}
+
+template <class Real>
+void extension_adjoint(Interpreter<Real>& in, const OpNode& op, int b) {
+  const Slots<Real> a{in, op, b};
+  const StaticArrays& g = in.grid();
+  // Warm start from the previous (later) step's solution of this backward pass.
+  std::vector<Real>& y = in.extension_adjoint_guess(b);
+  y.resize(3 * size_t(g.band_count), Real(0));
+  const SolverOptions& o = in.options();
+  const PcgResult r = solve_band_laplacian(g, a.bar("band_u"), y.data(), o.extension_tolerance, o.extension_max_iterations);
+  if (!r.converged) throw SimulationError(fmt::format("the adjoint extension solve did not converge (batch item {})", b));
+  Real* u_bar = a.bar("u");
+  for (int i = 0; i < g.band_count; ++i)
+    for (int k = 0; k < 6; ++k) {
+      const int nb = g.band_neighbors[6 * i + k];
+      if (nb <= -2) add3(u_bar, -nb - 2, load3(y.data(), i));
+    }
+}
+
+}  // namespace
+
+template <class Real>
+const SolverSchedule<Real>& solver_schedule(const std::string& name) {
+  static const SolverSchedule<Real> newmark{&newmark_forward<Real>, &newmark_adjoint<Real>};
+  static const SolverSchedule<Real> band{&extension_forward<Real>, &extension_adjoint<Real>};
+  if (name == "newmark_pcg") return newmark;
+  if (name == "band_laplacian") return band;
+  throw std::logic_error("no solver schedule '" + name + "' (known: newmark_pcg, band_laplacian)");
+}
+
+template const SolverSchedule<double>& solver_schedule<double>(const std::string&);
+template const SolverSchedule<float>& solver_schedule<float>(const std::string&);
+
+}  // namespace ssc

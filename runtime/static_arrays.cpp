@@ -1,0 +1,45 @@
+// The static arrays by name (see static_arrays.h).
+#include "runtime/static_arrays.h"
+
+namespace ssc {
+
+std::vector<NamedStaticArray> named_static_arrays(const StaticArrays& g) {
+  std::vector<NamedStaticArray> a;
+  auto ints = [&](const char* name, std::vector<int> v) { a.push_back({name, true, std::move(v), {}}); };
+  auto reals = [&](const char* name, std::vector<double> v) { a.push_back({name, false, {}, std::move(v)}); };
+  ints("cell_nodes", g.cell_nodes);
+  reals("cell_weights", g.cell_volume_weights);
+  reals("node_volume", g.node_volume);
+  reals("node_rest", g.node_rest);
+  ints("node_cell_offset", g.node_cell_offset);
+  ints("node_cell_entry", g.node_cell_entry);
+  std::vector<int> pn;
+  std::vector<double> pt, pa;
+  for (const ContactPoint& p : g.contact_points) {
+    pn.push_back(p.node_a);
+    pn.push_back(p.node_b);
+    pt.push_back(p.t);
+    pa.push_back(p.area);
+  }
+  ints("point_nodes", pn);
+  reals("point_t", pt);
+  reals("point_area", pa);
+  ints("node_point_offset", g.node_point_offset);
+  ints("node_point_entry", g.node_point_entry);
+  ints("band_neighbors", g.band_neighbors);
+  ints("band_degree", g.band_degree);
+  std::vector<std::vector<int>> nb(g.node_count);
+  for (int i = 0; i < g.band_count; ++i)
+    for (int k = 0; k < 6; ++k)
+      if (g.band_neighbors[6 * i + k] <= -2) nb[-g.band_neighbors[6 * i + k] - 2].push_back(i);
+  std::vector<int> off{0}, ent;
+  for (const auto& l : nb) {
+    ent.insert(ent.end(), l.begin(), l.end());
+    off.push_back(int(ent.size()));
+  }
+  ints("node_band_offset", off);
+  ints("node_band_entry", ent);
+  return a;
+}
+
+}  // namespace ssc
