@@ -6,6 +6,7 @@
 #include "ops/corotation.h"
 #include "ops/elasticity.h"
 #include "ops/extension.h"
+#include "ops/friction.h"
 #include "ops/newmark.h"
 #include "ops/nodal.h"
 
@@ -18,6 +19,7 @@ const std::vector<OpSpec>& op_registry() {
       ops::corotation_spec(),
       ops::corotation_force_spec(),
       ops::contact_force_spec(),
+      ops::friction_spec(),
       ops::node_force_spec(),
       ops::stiffness_apply_spec(),
       ops::newmark_rhs_spec(),

@@ -174,6 +174,7 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
       for (size_t p = 0; p < sim.parameters(b).planes.size(); ++p) {
         pg.plane_normal.emplace_back(q[6 * p], q[6 * p + 1], q[6 * p + 2]);
         pg.plane_height.push_back(q[6 * p + 3]);
+        pg.plane_friction.push_back(tg.friction >= 0 ? adj.data(tg.friction, b)[2 * p] : 0.0);
       }
     }
     // v_0,i = v_lin + w x (x_i - c) on free nodes.

@@ -30,6 +30,7 @@ struct ParameterGradient {
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();
   std::vector<Eigen::Vector3d> plane_normal;  // d cost / d (unit normal), per plane
   std::vector<double> plane_height;
+  std::vector<double> plane_friction;  // d cost / d mu, per plane (0 without friction)
 };
 
 struct CostGradient {

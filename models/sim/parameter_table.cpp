@@ -85,6 +85,20 @@ void add_plane_rows(std::vector<ParameterRow>& rows, size_t k) {
   height.set = [k](PhysicalParameters& p, double v) { p.planes[k].height = v; };
   height.gradient = [k](const ParameterGradient& g, const PhysicalParameters&) { return g.plane_height[k]; };
   rows.push_back(height);
+  ParameterRow friction;
+  friction.name = prefix + "friction";
+  friction.unit = "1";
+  friction.transform = ParameterRow::Transform::Bounded;
+  friction.optimiser_lower = 0, friction.optimiser_upper = 2;
+  friction.lower = 0, friction.lower_inclusive = true;
+  friction.scene_key = key + "friction";
+  friction.graph_input = "friction";
+  friction.get = [k](const PhysicalParameters& p) { return p.planes[k].friction; };
+  friction.set = [k](PhysicalParameters& p, double v) { p.planes[k].friction = v; };
+  friction.gradient = [k](const ParameterGradient& g, const PhysicalParameters&) {
+    return k < g.plane_friction.size() ? g.plane_friction[k] : 0.0;
+  };
+  rows.push_back(friction);
   for (const bool is_polar : {true, false}) {
     ParameterRow r;
     r.name = prefix + (is_polar ? "polar_deg" : "azimuth_deg");

@@ -7,9 +7,12 @@
 namespace ssc {
 
 Problem load_problem(const std::string& scene_path, const std::vector<std::string>& overrides,
-                     const std::string& observation_dir, double phi_max_override) {
+                     const std::string& observation_dir, double phi_max_override,
+                     const std::vector<std::string>& parameters) {
   Problem p;
   p.scene = load_scene(scene_path, overrides);
+  for (const std::string& name : parameters)
+    if (name.find("friction") != std::string::npos) p.scene.friction_keys = true;
   p.grid = build_body_grid(p.scene);
   p.observations = read_observations(observation_dir);
   p.frames = observed_frames(p.observations, p.scene.time.dt, observation_dir);

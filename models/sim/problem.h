@@ -20,8 +20,11 @@ struct Problem {
 };
 
 // phi_max: the override if > 0, else the scene's observation.phi_max, else 2 cell sizes.
-// The scene's time.steps is raised if the observations reach further.
+// The scene's time.steps is raised if the observations reach further. `parameters` are the
+// ones the command fits, sweeps or differentiates: the scene models every effect they belong
+// to (a friction coefficient turns friction on, at the scene's coefficient, 0 by default).
 Problem load_problem(const std::string& scene_path, const std::vector<std::string>& overrides,
-                     const std::string& observation_dir, double phi_max_override = 0);
+                     const std::string& observation_dir, double phi_max_override = 0,
+                     const std::vector<std::string>& parameters = {});
 
 }  // namespace ssc

@@ -90,20 +90,26 @@ PlaneSpec read_plane(const JsonReader& r, const PlaneSpec& defaults) {
   p.height = r.number("height", p.height);
   p.stiffness = r.non_negative("stiffness", r.number("stiffness", p.stiffness));
   p.softmin_alpha = r.positive("softmin_alpha", r.number("softmin_alpha", p.softmin_alpha));
+  p.friction = r.non_negative("friction", r.number("friction", p.friction));
+  p.friction_velocity = r.positive("friction_velocity", r.number("friction_velocity", p.friction_velocity));
   return p;
 }
 
 void read_ground(const JsonReader& r, Scene& s) {
   if (!r.boolean("enabled", true)) {
     // A disabled ground may keep its settings; they are accepted and ignored.
-    for (const char* key : {"height", "normal", "angles_deg", "stiffness", "softmin_alpha", "planes"}) r.has(key);
+    for (const char* key : {"height", "normal", "angles_deg", "stiffness", "softmin_alpha", "friction",
+                            "friction_velocity", "planes"})
+      r.has(key);
     r.reject_unknown_keys();
     return;
   }
   const PlaneSpec first = read_plane(r, PlaneSpec{});
+  s.friction_keys = r.has("friction") || r.has("friction_velocity");
   if (r.has("planes")) {
     PlaneSpec defaults = first;
     for (const JsonReader& pr : r.array_of_objects("planes")) {
+      s.friction_keys = s.friction_keys || pr.has("friction") || pr.has("friction_velocity");
       s.planes.push_back(read_plane(pr, defaults));
       pr.reject_unknown_keys();
     }
@@ -234,6 +240,14 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   Scene scene = parse_scene(config, path);
   scene.resolved = config;
   return scene;
+}
+
+bool models_friction(const Scene& scene) {
+  if (scene.planes.empty()) return false;
+  if (scene.friction_keys) return true;
+  for (const PlaneSpec& p : scene.planes)
+    if (p.friction > 0) return true;
+  return false;
 }
 
 }  // namespace ssc

@@ -32,6 +32,8 @@ struct PlaneSpec {
   double height = 0;                // plane: normal . x = height
   double stiffness = 1e5;           // Pa per metre of penetration
   double softmin_alpha = 100;       // 1/m
+  double friction = 0;              // Coulomb coefficient mu (ops/friction.h)
+  double friction_velocity = 1e-3;  // m/s: the smoothing velocity eps below which friction is viscous
   // The normal's azimuth about +y in degrees. Derived from the normal, except for a vertical
   // normal, which has none: then this value is kept so that setting the azimuth before the
   // polar angle (as an optimiser may) is not lost.
@@ -66,6 +68,9 @@ struct Scene {
   Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  // rad/s about the centre of mass
   std::vector<PlaneSpec> planes;                                // empty: no ground
+  // Friction is in the model (the timestep graph has the friction op) when the scene gives
+  // a friction key, or a command fits or sweeps a friction coefficient; see models_friction.
+  bool friction_keys = false;
   std::vector<DirichletBox> dirichlet;
   TimeSpec time;
   SolverSpec solver;
@@ -79,5 +84,8 @@ Scene parse_scene(const nlohmann::json& config, const std::string& file);
 
 // Ground normal from polar angle (from +y) and azimuth (about +y, from +x), degrees.
 Eigen::Vector3d normal_from_angles(double polar_deg, double azimuth_deg);
+
+// Whether the simulation models friction: a friction key in the scene, or a plane with mu > 0.
+bool models_friction(const Scene& scene);
 
 }  // namespace ssc

@@ -34,7 +34,7 @@ PhysicalParameters PhysicalParameters::from_scene(const Scene& s) {
 
 Simulation::Simulation(const Scene& scene, const SimGrid& grid, int batch, bool extension)
     : grid_(grid),
-      graph_(build_timestep_graph(int(scene.planes.size()), extension)),
+      graph_(build_timestep_graph(int(scene.planes.size()), extension, models_friction(scene))),
       params_(batch, PhysicalParameters::from_scene(scene)),
       audits_(batch),
       dt_(scene.time.dt),
@@ -104,6 +104,13 @@ void Simulation::write_inputs(int b) {
       const Eigen::Vector3d n = pl.normal.normalized();
       const double v[6] = {n.x(), n.y(), n.z(), pl.height, pl.stiffness, pl.softmin_alpha};
       for (int k = 0; k < 6; ++k) q[6 * i + k] = v[k];
+    }
+  }
+  if (graph_.friction >= 0) {
+    double* q = st.data(graph_.friction, b);
+    for (size_t i = 0; i < p.planes.size(); ++i) {
+      q[2 * i] = p.planes[i].friction;
+      q[2 * i + 1] = p.planes[i].friction_velocity;
     }
   }
   double* fixed = st.data(graph_.fixed, b);

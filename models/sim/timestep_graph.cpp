@@ -3,7 +3,7 @@
 
 namespace ssc {
 
-TimestepGraph build_timestep_graph(int plane_count, bool extension) {
+TimestepGraph build_timestep_graph(int plane_count, bool extension, bool friction) {
   TimestepGraph t;
   Graph& g = t.graph;
   using D = Domain;
@@ -18,6 +18,8 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension) {
   t.theta = g.add_input("theta", D::Scalar, 1);
   if (plane_count > 0) t.ground_planes = g.add_input("ground_planes", D::Scalar, 6 * plane_count);
   g.set_plane_count(plane_count);
+  friction = friction && plane_count > 0;
+  if (friction) t.friction = g.add_input("friction", D::Scalar, 2 * plane_count);
   t.fixed = g.add_input("fixed", D::Node, 1);
   t.u_prev = g.add_state("u_prev", D::Node, 3);
   t.v_prev = g.add_state("v_prev", D::Node, 3);
@@ -43,8 +45,17 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension) {
              {G("u_prev", t.u_prev), G("v_prev", t.v_prev), P("ground_planes", t.ground_planes), P("dt", t.dt),
               P("theta", t.theta)},
              {{"point_force", "contact_force", D::Point, 3}});
-    force_inputs.push_back(G("point_force", g.find_tensor("contact_force")));
+    int point_force = g.find_tensor("contact_force");
+    if (friction) {
+      g.add_op("friction",
+               {G("u_prev", t.u_prev), G("v_prev", t.v_prev), P("ground_planes", t.ground_planes),
+                P("friction", t.friction), P("contact_force", point_force)},
+               {{"point_force", "contact_friction_force", D::Point, 3}, {"damping", "friction_damping", D::Node, 6}});
+      point_force = g.find_tensor("contact_friction_force");
+    }
+    force_inputs.push_back(G("point_force", point_force));
   }
+  const int damping = g.find_tensor("friction_damping");
   g.add_op("node_force", force_inputs, {{"force", "force", D::Node, 3}});
   g.add_op("stiffness_apply",
            {P("rotation", t.rotation), P("lambda", t.lambda), P("mu", t.mu), G("u_prev", t.u_prev)},
@@ -53,12 +64,14 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension) {
                                               P("stiffness_damping", t.stiffness_damping)};
   std::vector<OpArg> rhs_inputs = {G("ku_corner", g.find_tensor("k_u_prev")), P("mass", t.mass), P("u_prev", t.u_prev),
                                    P("v_prev", t.v_prev), P("force", g.find_tensor("force"))};
+  if (damping >= 0) rhs_inputs.push_back(P("damping", damping));
   rhs_inputs.insert(rhs_inputs.end(), newmark_scalars.begin(), newmark_scalars.end());
   g.add_op("newmark_rhs", rhs_inputs, {{"rhs", "rhs", D::Node, 3}});
   std::vector<OpArg> solve_inputs = {OpArg{"rotation", t.rotation, A::Opaque}, P("lambda", t.lambda), P("mu", t.mu),
                                      OpArg{"mass", t.mass, A::Opaque},         OpArg{"rhs", g.find_tensor("rhs"), A::Opaque},
                                      OpArg{"u_prev", t.u_prev, A::Opaque},     OpArg{"v_prev", t.v_prev, A::Opaque},
                                      OpArg{"fixed", t.fixed, A::Opaque}};
+  if (damping >= 0) solve_inputs.push_back(OpArg{"damping", damping, A::Opaque});
   solve_inputs.insert(solve_inputs.end(), newmark_scalars.begin(), newmark_scalars.end());
   g.add_op("newmark_solve", solve_inputs,
            {{"u", "u", D::Node, 3}, {"cg_iterations", "cg_iterations", D::Scalar, 1}});

@@ -48,7 +48,7 @@ Command register_gradient(CLI::App& app) {
       overrides.push_back("solver.tolerance=1e-12");
       overrides.push_back("solver.extension_tolerance=1e-13");
     }
-    const Problem problem = load_problem(o->scene, overrides, o->observations, o->phi_max);
+    const Problem problem = load_problem(o->scene, overrides, o->observations, o->phi_max, o->params);
     Simulation sim(problem.scene, problem.grid, 1, true);
     place_simulation(sim, o->device);
     const SurfaceConstraintCost cost(problem.grid, problem.phi_max);

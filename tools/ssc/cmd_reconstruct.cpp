@@ -187,7 +187,7 @@ Command register_reconstruct(CLI::App& app) {
   add_progress_options(sub, &o->progress);
   return [o] {
     const std::string device = choose_device(o->device);
-    const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max);
+    const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max, o->fit);
     const UnitScales scales = unit_scales(problem.scene, problem.grid);  // checked before the long run
     ReconstructionOptions ro;
     ro.fit = o->fit;

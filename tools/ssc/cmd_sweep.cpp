@@ -69,7 +69,7 @@ Command register_sweep(CLI::App& app) {
   return [o] {
     SweepRange range = parse_range(o->param);
     if (o->log && (range.lo <= 0 || range.hi <= 0)) throw InputError("--log needs positive LO and HI");
-    const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max);
+    const Problem problem = load_problem(o->scene, o->overrides, o->observations, o->phi_max, {range.name});
     OutputDir out(o->out, {o->scene, o->observations, problem.scene.object.path});
     out.manifest()["scene"] = {{"file", o->scene}, {"resolved", problem.scene.resolved}};
     out.manifest()["observations"] = folder_fingerprint(o->observations);
