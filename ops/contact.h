@@ -60,15 +60,24 @@ SSC_HD inline Vec3<Real> contact_force(Vec3<Real> x, Vec3<Real> v, Real area, co
   return f;
 }
 
+// d softmin / d alpha = (x s' - softmin) / alpha and d s' / d alpha = -x s' (1 - s').
+template <class Real>
+SSC_HD inline void softmin_alpha_derivatives(Real x, Real alpha, Real& ds, Real& ds1) {
+  const Real s = softmin(x, alpha), s1 = softmin_derivative(x, alpha);
+  ds = (x * s1 - s) / alpha;
+  ds1 = -x * s1 * (Real(1) - s1);
+}
+
 // Adjoint of contact_force for the cotangent f_bar: accumulates x_bar, v_bar and, per
-// plane, normal_bar and height_bar (the plane's stiffness and sharpness are not
-// optimised). With F = f_cur + theta dt fdot and force F n:
+// plane, normal_bar, height_bar and, where given, stiffness_bar and alpha_bar. With
+// F = f_cur + theta dt fdot and force F n:
 //   dF/d dist = -k A (s' + theta dt s'' (n.v)),  dF/d(n.v) = -k A theta dt s',
-//   s'' = -alpha s' (1 - s').
+//   s'' = -alpha s' (1 - s'),  dF/dk = F / k.
 template <class Real>
 SSC_HD inline void adj_contact_force(Vec3<Real> x, Vec3<Real> v, Real area, const GroundPlane<Real>* planes,
                                      int plane_count, Real dt, Real theta, Vec3<Real> f_bar, Vec3<Real>& x_bar,
-                                     Vec3<Real>& v_bar, Vec3<Real>* normal_bar, Real* height_bar) {
+                                     Vec3<Real>& v_bar, Vec3<Real>* normal_bar, Real* height_bar,
+                                     Real* stiffness_bar = nullptr, Real* alpha_bar = nullptr) {
   for (int p = 0; p < plane_count; ++p) {
     const GroundPlane<Real>& g = planes[p];
     const Real dist = dot(g.normal, x) - g.height;
@@ -85,6 +94,12 @@ SSC_HD inline void adj_contact_force(Vec3<Real> x, Vec3<Real> v, Real area, cons
     v_bar += nv_bar * g.normal;
     normal_bar[p] += F * f_bar + dist_bar * x + nv_bar * v;
     height_bar[p] -= dist_bar;
+    if (stiffness_bar) stiffness_bar[p] += F_bar * F / g.stiffness;
+    if (alpha_bar) {
+      Real ds, ds1;
+      softmin_alpha_derivatives(dist, g.alpha, ds, ds1);
+      alpha_bar[p] += F_bar * (-kA) * (ds + theta * dt * ds1 * nv);
+    }
   }
 }
 
@@ -142,19 +157,19 @@ SSC_HD inline void adj_contact_force_point(int i, const PartContext<Real>& cx, c
   Vec3<Real> x, vel, xb = zero3<Real>(), vb = zero3<Real>();
   contact_point_state(i, point_nodes, point_t, node_rest, u_prev, v_prev, x, vel);
   Vec3<Real> normal_bar[kMaxGroundPlanes];
-  Real height_bar[kMaxGroundPlanes];
+  Real height_bar[kMaxGroundPlanes], stiffness_bar[kMaxGroundPlanes], alpha_bar[kMaxGroundPlanes];
   for (int k = 0; k < plane_count; ++k) {
     normal_bar[k] = zero3<Real>();
-    height_bar[k] = Real(0);
+    height_bar[k] = stiffness_bar[k] = alpha_bar[k] = Real(0);
   }
   adj_contact_force(x, vel, point_area[i], planes, plane_count, dt[0], theta[0], load3(point_force_bar, i), xb, vb,
-                    normal_bar, height_bar);
+                    normal_bar, height_bar, stiffness_bar, alpha_bar);
   store3(x_bar, i, xb);
   store3(v_bar, i, vb);
   Real* pb = plane_bar_share + kPlaneValues * cx.n_plane * i;
   for (int k = 0; k < plane_count; ++k, pb += kPlaneValues) {
     pb[0] = normal_bar[k].x, pb[1] = normal_bar[k].y, pb[2] = normal_bar[k].z, pb[3] = height_bar[k];
-    pb[4] = Real(0), pb[5] = Real(0);  // stiffness and sharpness are data, not fitted
+    pb[4] = stiffness_bar[k], pb[5] = alpha_bar[k];
   }
 }
 

@@ -55,8 +55,8 @@ SSC_HD inline void plane_friction(const GroundPlane<Real>& g, Real mu, Real eps,
 template <class Real>
 SSC_HD inline void adj_plane_friction(const GroundPlane<Real>& g, Real mu, Real eps, Real area, Vec3<Real> x,
                                       Vec3<Real> v, Vec3<Real> f_bar, const Real* C_bar, Vec3<Real>& x_bar,
-                                      Vec3<Real>& v_bar, Vec3<Real>& normal_bar, Real& height_bar, Real& mu_bar,
-                                      Real& eps_bar) {
+                                      Vec3<Real>& v_bar, Vec3<Real>& normal_bar, Real& height_bar,
+                                      Real& stiffness_bar, Real& alpha_bar, Real& mu_bar, Real& eps_bar) {
   const Vec3<Real> n = g.normal;
   const Real d = dot(n, x) - g.height;
   const Real kA = g.stiffness * area;
@@ -84,7 +84,12 @@ SSC_HD inline void adj_plane_friction(const GroundPlane<Real>& g, Real mu, Real 
   v_bar += w_bar - nw * n;
   n_bar += (-nv) * w_bar - nw * v;
   mu_bar += N * q_bar;
-  const Real d_bar = mu * q_bar * (-kA * softmin_derivative(d, g.alpha));
+  const Real N_bar = mu * q_bar;
+  stiffness_bar += N_bar * N / g.stiffness;
+  Real ds, ds1;
+  softmin_alpha_derivatives(d, g.alpha, ds, ds1);
+  alpha_bar += N_bar * (-kA) * ds;
+  const Real d_bar = N_bar * (-kA * softmin_derivative(d, g.alpha));
   x_bar += d_bar * n;
   n_bar += d_bar * x;
   height_bar -= d_bar;
@@ -150,11 +155,12 @@ SSC_HD inline void adj_friction_point(int i, const PartContext<Real>& cx, const 
   }
   for (int k = 0; k < plane_count; ++k) {
     Vec3<Real> normal_bar = zero3<Real>();
-    Real height_bar = Real(0), mu_bar = Real(0), eps_bar = Real(0);
+    Real height_bar = Real(0), stiffness_bar = Real(0), alpha_bar = Real(0), mu_bar = Real(0), eps_bar = Real(0);
     adj_plane_friction(planes[k], friction[kFrictionValues * k], friction[kFrictionValues * k + 1], point_area[i], x, v,
-                       f_bar, C_bar, xb, vb, normal_bar, height_bar, mu_bar, eps_bar);
+                       f_bar, C_bar, xb, vb, normal_bar, height_bar, stiffness_bar, alpha_bar, mu_bar, eps_bar);
     Real* p = pb + kPlaneValues * k;
     p[0] = normal_bar.x, p[1] = normal_bar.y, p[2] = normal_bar.z, p[3] = height_bar;
+    p[4] = stiffness_bar, p[5] = alpha_bar;
     fb[kFrictionValues * k] = mu_bar;
     fb[kFrictionValues * k + 1] = eps_bar;
   }
