@@ -124,8 +124,13 @@ TEST(CodegenSource, RunTimeValuesAreParameters) {
 std::vector<KernelSource> example_kernel_sources(const std::string& real) {
   std::vector<KernelSource> out;
   std::set<std::string> seen;
-  for (auto [planes, extension] : {std::pair{1, true}, std::pair{0, false}, std::pair{1, false}}) {
-    const TimestepGraph t = build_timestep_graph(planes, extension);
+  struct Variant {
+    int planes;
+    bool extension, friction;
+  };
+  for (const Variant v : {Variant{1, true, false}, Variant{0, false, false}, Variant{1, false, false},
+                          Variant{2, true, true}}) {
+    const TimestepGraph t = build_timestep_graph(v.planes, v.extension, v.friction);
     const KernelPlan plan = plan_kernels(t.graph);
     for (const PlannedKernel* k : plan.unique_kernels())
       if (seen.insert(k->name).second) out.push_back({k->name, kernel_source(*k, {real, 128})});

@@ -386,10 +386,10 @@ TEST(GpuExtension, OneAndTwoPhaseGridSolvesGiveTheSameBits) {
 // A whole trajectory (12 steps, frames at 4, 8 and 12, contact, checkpointing every 5
 // steps) with a cost linear in u and quadratic in the band: the GPU backward pass against
 // the interpreter's, per parameter.
-TEST(GpuAdjoint, TrajectoryGradientMatchesInterpreter) {
-  SKIP_WITHOUT_GPU();
-  test_cache_root();
-  const Scene scene = torus_scene({"solver.tolerance=1e-12", "solver.extension_tolerance=1e-13"});
+void trajectory_gradient_matches_interpreter(std::vector<std::string> overrides, const char* label) {
+  overrides.push_back("solver.tolerance=1e-12");
+  overrides.push_back("solver.extension_tolerance=1e-13");
+  const Scene scene = torus_scene(overrides);
   const SimGrid grid = build_body_grid(scene);
   const FrameCostFunction cost = synthetic_frame_cost(grid);
   // CPU and GPU with state checkpoints every 5 steps (recomputed segments); the GPU again
@@ -413,7 +413,7 @@ TEST(GpuAdjoint, TrajectoryGradientMatchesInterpreter) {
                 r.mass_damping == k.mass_damping && r.stiffness_damping == k.stiffness_damping &&
                 r.gravity == k.gravity && r.linear_velocity == k.linear_velocity &&
                 r.angular_velocity == k.angular_velocity && r.plane_height == k.plane_height &&
-                r.plane_normal == k.plane_normal)
+                r.plane_normal == k.plane_normal && r.input == k.input)
         << "item " << b << ": steps kept whole on the device differ from recomputed steps";
   }
   for (int b = 0; b < 2; ++b) {
@@ -433,6 +433,7 @@ TEST(GpuAdjoint, TrajectoryGradientMatchesInterpreter) {
     for (size_t k = 0; k < c.plane_height.size(); ++k) {
       pairs.push_back({"plane_height", {c.plane_height[k], g.plane_height[k]}});
       for (int j = 0; j < 3; ++j) pairs.push_back({fmt::format("plane_normal[{}]", j), {c.plane_normal[k][j], g.plane_normal[k][j]}});
+      pairs.push_back({"friction", {c.input_entry("friction", 2 * int(k)), g.input_entry("friction", 2 * int(k))}});
     }
     double worst = 0;
     std::string which;
@@ -440,11 +441,23 @@ TEST(GpuAdjoint, TrajectoryGradientMatchesInterpreter) {
       const double rel = std::abs(v.first - v.second) / std::max(std::abs(v.first), 1e-12);
       if (rel >= worst) worst = rel, which = name;
     }
-    std::printf("[ double ] trajectory gradient, item %d: cost CPU %.12g GPU %.12g; worst parameter relative "
-                "difference %.3g (%s)\n", b,
+    std::printf("[ double ] trajectory gradient%s, item %d: cost CPU %.12g GPU %.12g; worst parameter relative "
+                "difference %.3g (%s)\n", label, b,
                 results[0][b].cost, results[1][b].cost, worst, which.c_str());
-    EXPECT_LT(worst, 1e-8) << which;
+    EXPECT_LT(worst, 1e-8) << label << " " << which;
   }
+}
+
+TEST(GpuAdjoint, TrajectoryGradientMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  trajectory_gradient_matches_interpreter({}, "");
+}
+
+TEST(GpuAdjoint, FrictionTrajectoryGradientMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  trajectory_gradient_matches_interpreter({"ground.friction=0.4"}, " with friction");
 }
 
 }  // namespace

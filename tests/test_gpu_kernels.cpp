@@ -79,11 +79,12 @@ std::set<int> written_by(const Graph& graph, const std::vector<int>& ops, bool a
 
 // The random state of the file comment, in a batch of two.
 struct RandomStep {
-  Scene scene = torus_scene();
-  SimGrid grid = build_body_grid(scene);
-  Simulation sim{scene, grid, 2, true};
+  Scene scene;
+  SimGrid grid;
+  Simulation sim;
 
-  RandomStep() {
+  explicit RandomStep(const std::vector<std::string>& overrides = {})
+      : scene(torus_scene(overrides)), grid(build_body_grid(scene)), sim(scene, grid, 2, true) {
     std::mt19937_64 rng(2026);
     std::uniform_real_distribution<double> uniform(-1.0, 1.0);
     std::normal_distribution<double> normal(0.0, 1.0);
@@ -120,8 +121,12 @@ struct RandomStep {
   }
 };
 
-void each_forward_kernel(const std::string& real, double tolerance) {
-  RandomStep r;
+// The torus as it is, and with Coulomb friction at a ground it reaches (the friction op's
+// kernels and the damped time-step solve).
+const std::vector<std::vector<std::string>> kVariants = {{}, {"ground.friction=0.4", "ground.height=0.1"}};
+
+void each_forward_kernel(const std::string& real, double tolerance, const std::vector<std::string>& overrides) {
+  RandomStep r(overrides);
   Interpreter<double>& cpu = r.sim.interpreter();
   const Graph& graph = cpu.graph();
   const KernelPlan plan = plan_kernels(graph);
@@ -155,8 +160,8 @@ void each_forward_kernel(const std::string& real, double tolerance) {
   std::printf("[ %s ] every forward kernel: worst relative error %.3g\n", real.c_str(), worst);
 }
 
-void each_adjoint_kernel(const std::string& real, double tolerance) {
-  RandomStep r;
+void each_adjoint_kernel(const std::string& real, double tolerance, const std::vector<std::string>& overrides) {
+  RandomStep r(overrides);
   Interpreter<double>& cpu = r.sim.interpreter();
   const Graph& graph = cpu.graph();
   const TimestepGraph& tg = r.sim.timestep_graph();
@@ -198,31 +203,32 @@ void each_adjoint_kernel(const std::string& real, double tolerance) {
 TEST(GpuKernels, EachForwardKernelDouble) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
-  each_forward_kernel("double", 1e-10);
+  for (const auto& v : kVariants) each_forward_kernel("double", 1e-10, v);
 }
 
 TEST(GpuKernels, EachForwardKernelFloat) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
-  each_forward_kernel("float", 1e-4);
+  for (const auto& v : kVariants) each_forward_kernel("float", 1e-4, v);
 }
 
 TEST(GpuKernels, EachAdjointKernelDouble) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
-  each_adjoint_kernel("double", 1e-10);
+  for (const auto& v : kVariants) each_adjoint_kernel("double", 1e-10, v);
 }
 
 TEST(GpuKernels, EachAdjointKernelFloat) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
-  each_adjoint_kernel("float", 1e-4);
+  for (const auto& v : kVariants) each_adjoint_kernel("float", 1e-4, v);
 }
 
 // The CPU half of the tests above, runnable anywhere: the random state steps, and the
 // adjoint of every group changes some cotangent (so the GPU comparison can fail).
 TEST(GpuKernels, RandomStateAndEveryAdjointGroupOnTheCpu) {
-  RandomStep r;
+  for (const auto& variant : kVariants) {
+  RandomStep r(variant);
   Interpreter<double>& cpu = r.sim.interpreter();
   const Graph& graph = cpu.graph();
   const TimestepGraph& tg = r.sim.timestep_graph();
@@ -239,6 +245,7 @@ TEST(GpuKernels, RandomStateAndEveryAdjointGroupOnTheCpu) {
     for (int t : written_by(graph, g.ops, true))
       changed |= relative_difference(cpu.adjoint().all(t), before.all(t)) > 1e-6;
     EXPECT_TRUE(changed) << g.names;
+  }
   }
 }
 

@@ -216,7 +216,7 @@ std::vector<Probe> probes(const PhysicalParameters& p0) {
                  [](const ParameterGradient& g) { return g.plane_height[0]; }});
   if (p0.planes[0].friction > 0)
     out.push_back({"ground.friction", 1e-6, [](PhysicalParameters& p, double e) { p.planes[0].friction += e; },
-                   [](const ParameterGradient& g) { return g.plane_friction[0]; }});
+                   [](const ParameterGradient& g) { return g.input_entry("friction", 0); }});
   Vec3 t[2];
   tangents(p0.planes[0].normal.normalized(), &t[0], &t[1]);
   for (int k = 0; k < 2; ++k) {
@@ -238,7 +238,8 @@ std::vector<double> flatten(const CostGradient& r) {
   for (const Vec3& n : g.plane_normal)
     for (int k = 0; k < 3; ++k) v.push_back(n[k]);
   for (double h : g.plane_height) v.push_back(h);
-  for (double m : g.plane_friction) v.push_back(m);
+  for (const auto& [name, values] : g.input)
+    for (double x : values) v.push_back(x);
   return v;
 }
 
@@ -355,9 +356,9 @@ TEST(GradientPipeline, FrictionGradientPointsToTheTrueCoefficient) {
     p.planes[0].friction = mu;
     sim.set_parameters(0, p);
     const CostGradient r = evaluate_cost_gradient(sim, *pl->cost, pl->frames, {})[0];
-    std::printf("%8.2f %14.6e %14.6e\n", mu, r.cost, r.gradient.plane_friction[0]);
-    if (mu <= 0.1) EXPECT_LT(r.gradient.plane_friction[0], 0) << "mu " << mu;
-    if (mu >= 0.22) EXPECT_GT(r.gradient.plane_friction[0], 0) << "mu " << mu;
+    std::printf("%8.2f %14.6e %14.6e\n", mu, r.cost, r.gradient.input_entry("friction", 0));
+    if (mu <= 0.1) EXPECT_LT(r.gradient.input_entry("friction", 0), 0) << "mu " << mu;
+    if (mu >= 0.22) EXPECT_GT(r.gradient.input_entry("friction", 0), 0) << "mu " << mu;
   }
 }
 

@@ -23,7 +23,7 @@ PhysicalParameters two_planes() {
 TEST(ParameterTable, EveryRowIsUniqueAndReadsBackWhatItWrites) {
   const PhysicalParameters p = two_planes();
   const std::vector<ParameterRow> table = parameter_table(p);
-  EXPECT_EQ(table.size(), 5u + 9u + 2u * 3u);
+  EXPECT_EQ(table.size(), 5u + 9u + 2u * 5u);  // per plane: height, two angles, friction, friction velocity
   std::set<std::string> names, keys;
   for (const ParameterRow& r : table) {
     EXPECT_TRUE(names.insert(r.name).second) << r.name;
@@ -41,6 +41,15 @@ TEST(ParameterTable, EveryRowIsUniqueAndReadsBackWhatItWrites) {
   // The vector rows share their scene key's base, each component its own index.
   EXPECT_EQ(find_parameter_row(table, "gravity.y")->scene_key, "gravity[1]");
   EXPECT_EQ(find_parameter_row(table, "ground.planes[1].polar_deg")->scene_key, "ground.planes[1].angles_deg");
+  // Rows that feed a graph input entry as they are: the simulation writes them, the gradient
+  // reads them there.
+  const ParameterRow* mu1 = find_parameter_row(table, "ground.planes[1].friction");
+  EXPECT_EQ(mu1->graph_input, "friction");
+  EXPECT_EQ(mu1->graph_component, 2);
+  ParameterGradient g;
+  g.input["friction"] = {1, 2, 3, 4};
+  EXPECT_EQ(mu1->gradient(g, p), 3);
+  EXPECT_EQ(find_parameter_row(table, "ground.friction_velocity")->gradient(g, p), 2);
 }
 
 TEST(ParameterTable, RangesAndUnitsAreTheModelsOwn) {
@@ -55,6 +64,9 @@ TEST(ParameterTable, RangesAndUnitsAreTheModelsOwn) {
   EXPECT_EQ(e.mass * 100 + e.length * 10 + e.time, 100 - 10 - 2);  // kg m^-1 s^-2
   EXPECT_EQ(parameter_row("ground.planes[2].height").unit, "m");
   EXPECT_THROW(parameter_row("youngs_modulus.x"), InputError);
+  EXPECT_TRUE(parameter_row("ground.friction").value_error(0).empty());
+  EXPECT_FALSE(parameter_row("ground.friction").value_error(-0.1).empty());
+  EXPECT_FALSE(parameter_row("ground.planes[1].friction_velocity").value_error(0).empty());
 }
 
 }  // namespace

@@ -163,6 +163,12 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
   sim.sync_host();  // the initial state, the last one the backward pass loaded
   for (int b = 0; b < B; ++b) {
     ParameterGradient& pg = results[b].gradient;
+    for (size_t t = 0; t < tg.graph.tensors().size(); ++t) {
+      const TensorInfo& info = tg.graph.tensor(int(t));
+      if (info.role != TensorInfo::Role::Input || info.domain != Domain::Scalar) continue;
+      const double* q = adj.data(int(t), b);
+      pg.input[info.name].assign(q, q + info.components);
+    }
     pg.youngs_modulus = adj.data(tg.youngs_modulus, b)[0];
     pg.poisson_ratio = adj.data(tg.poisson_ratio, b)[0];
     pg.density = adj.data(tg.density, b)[0];
@@ -174,7 +180,6 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
       for (size_t p = 0; p < sim.parameters(b).planes.size(); ++p) {
         pg.plane_normal.emplace_back(q[6 * p], q[6 * p + 1], q[6 * p + 2]);
         pg.plane_height.push_back(q[6 * p + 3]);
-        pg.plane_friction.push_back(tg.friction >= 0 ? adj.data(tg.friction, b)[2 * p] : 0.0);
       }
     }
     // v_0,i = v_lin + w x (x_i - c) on free nodes.

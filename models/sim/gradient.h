@@ -10,6 +10,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <functional>
+#include <map>
 #include <vector>
 
 #include "models/cost/surface_constraint.h"
@@ -30,7 +31,14 @@ struct ParameterGradient {
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();
   std::vector<Eigen::Vector3d> plane_normal;  // d cost / d (unit normal), per plane
   std::vector<double> plane_height;
-  std::vector<double> plane_friction;  // d cost / d mu, per plane (0 without friction)
+  // d cost / d (graph input) for every input of the timestep graph, by its name: what the
+  // parameter rows with a graph_component read (models/sim/parameter_table.h).
+  std::map<std::string, std::vector<double>> input;
+  // d cost / d (the input entry a parameter row names); 0 if the graph lacks the input.
+  double input_entry(const std::string& name, int component) const {
+    const auto it = input.find(name);
+    return it == input.end() ? 0.0 : it->second.at(size_t(component));
+  }
 };
 
 struct CostGradient {

@@ -85,20 +85,24 @@ void add_plane_rows(std::vector<ParameterRow>& rows, size_t k) {
   height.set = [k](PhysicalParameters& p, double v) { p.planes[k].height = v; };
   height.gradient = [k](const ParameterGradient& g, const PhysicalParameters&) { return g.plane_height[k]; };
   rows.push_back(height);
-  ParameterRow friction;
-  friction.name = prefix + "friction";
-  friction.unit = "1";
-  friction.transform = ParameterRow::Transform::Bounded;
-  friction.optimiser_lower = 0, friction.optimiser_upper = 2;
-  friction.lower = 0, friction.lower_inclusive = true;
-  friction.scene_key = key + "friction";
-  friction.graph_input = "friction";
-  friction.get = [k](const PhysicalParameters& p) { return p.planes[k].friction; };
-  friction.set = [k](PhysicalParameters& p, double v) { p.planes[k].friction = v; };
-  friction.gradient = [k](const ParameterGradient& g, const PhysicalParameters&) {
-    return k < g.plane_friction.size() ? g.plane_friction[k] : 0.0;
-  };
-  rows.push_back(friction);
+  for (const bool velocity : {false, true}) {  // ops/friction.h: mu and the smoothing velocity
+    ParameterRow r;
+    r.name = prefix + (velocity ? "friction_velocity" : "friction");
+    r.unit = velocity ? "m/s" : "1";
+    if (velocity) r.length = 1, r.time = -1;
+    r.transform = velocity ? ParameterRow::Transform::Positive : ParameterRow::Transform::Bounded;
+    if (!velocity) r.optimiser_lower = 0, r.optimiser_upper = 2;
+    r.lower = 0, r.lower_inclusive = !velocity;
+    r.scene_key = key + (velocity ? "friction_velocity" : "friction");
+    r.graph_input = "friction";
+    r.graph_component = 2 * int(k) + (velocity ? 1 : 0);
+    r.get = [k, velocity](const PhysicalParameters& p) { return velocity ? p.planes[k].friction_velocity : p.planes[k].friction; };
+    r.set = [k, velocity](PhysicalParameters& p, double v) { (velocity ? p.planes[k].friction_velocity : p.planes[k].friction) = v; };
+    r.gradient = [c = r.graph_component](const ParameterGradient& g, const PhysicalParameters&) {
+      return g.input_entry("friction", c);
+    };
+    rows.push_back(r);
+  }
   for (const bool is_polar : {true, false}) {
     ParameterRow r;
     r.name = prefix + (is_polar ? "polar_deg" : "azimuth_deg");

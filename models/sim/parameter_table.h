@@ -28,6 +28,10 @@ struct ParameterRow {
   bool lower_inclusive = false, upper_inclusive = false;
   std::string scene_key;    // where the scene sets it, e.g. "material.youngs_modulus", "gravity[1]"
   std::string graph_input;  // the timestep graph's input tensor it feeds (models/sim/timestep_graph.h)
+  // The entry of graph_input (per batch item) that holds the value as it is: the simulation
+  // writes it there and the gradient reads its cotangent there (ParameterGradient::input).
+  // -1: the simulation packs the input itself (a plane's normal from its two angles).
+  int graph_component = -1;
   std::function<double(const PhysicalParameters&)> get;
   std::function<void(PhysicalParameters&, double)> set;
   std::function<double(const ParameterGradient&, const PhysicalParameters&)> gradient;

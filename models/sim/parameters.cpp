@@ -68,8 +68,10 @@ std::vector<std::string> expand_parameter_names(const std::vector<std::string>& 
 
 bool apply_parameter_override(nlohmann::json& config, const std::string& given, const nlohmann::json& value,
                               const std::string& file) {
-  // A scene key (material.youngs_modulus, ground.height) is left to the scene parser.
-  if (given.rfind("material.", 0) == 0 || given == "ground.height") return false;
+  // A scene key (material.youngs_modulus, ground.height, ground.friction) is left to the scene parser.
+  if (given.rfind("material.", 0) == 0 || given == "ground.height" || given == "ground.friction" ||
+      given == "ground.friction_velocity")
+    return false;
   const std::string name = canonical_parameter_name(given);
   const bool plane_name = name.rfind("ground.", 0) == 0;
   ParameterRow row;
@@ -77,8 +79,8 @@ bool apply_parameter_override(nlohmann::json& config, const std::string& given, 
     row = parameter_row(name);
   } catch (const InputError&) {
     if (!plane_name) return false;
-    throw InputError(fmt::format("{}: --set {}: the plane parameters are ground.planes[k].height, .polar_deg and "
-                                 ".azimuth_deg", file, given));
+    throw InputError(fmt::format("{}: --set {}: the plane parameters are ground.planes[k].height, .polar_deg, "
+                                 ".azimuth_deg, .friction and .friction_velocity", file, given));
   }
   if (!value.is_number()) throw InputError(fmt::format("{}: --set {}: must be a number, found {}", file, given, value.dump()));
   const double x = value.get<double>();
@@ -106,8 +108,16 @@ bool apply_parameter_override(nlohmann::json& config, const std::string& given, 
   }
   const size_t k = size_t(std::atoi(key.c_str() + key.find('[') + 1));
   nlohmann::json& node = config["ground"].contains("planes") ? config["ground"]["planes"][k] : config["ground"];
-  if (key.size() > 7 && key.compare(key.size() - 6, 6, "height") == 0) {
+  const auto ends_with = [&](const char* tail) {
+    const std::string t(tail);
+    return key.size() > t.size() && key.compare(key.size() - t.size(), t.size(), t) == 0;
+  };
+  if (ends_with("height")) {
     node["height"] = x;
+  } else if (ends_with("friction")) {
+    node["friction"] = x;
+  } else if (ends_with("friction_velocity")) {
+    node["friction_velocity"] = x;
   } else {
     const std::string prefix = name.substr(0, name.rfind('.') + 1);
     node.erase("normal");
@@ -117,8 +127,11 @@ bool apply_parameter_override(nlohmann::json& config, const std::string& given, 
 }
 
 std::string parameter_set_argument(const PhysicalParameters& p, const std::string& name, double value) {
-  // ground.height is the default of a planes list, not its first plane's: name the plane.
-  const std::string key = name == "ground.height" ? "ground.planes[0].height" : name;
+  // ground.height (.friction) is the default of a planes list, not its first plane's: name the plane.
+  const std::string key = name == "ground.height"     ? "ground.planes[0].height"
+                          : name == "ground.friction" ? "ground.planes[0].friction"
+                          : name == "ground.friction_velocity" ? "ground.planes[0].friction_velocity"
+                                                      : name;
   return fmt::format("{}={:.17g}", key, value);
 }
 

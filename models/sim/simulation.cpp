@@ -1,6 +1,8 @@
 // Forward simulation driver (see simulation.h).
 #include "models/sim/simulation.h"
 
+#include "models/sim/parameter_table.h"
+
 #include <fmt/format.h>
 
 #include <omp.h>
@@ -106,12 +108,11 @@ void Simulation::write_inputs(int b) {
       for (int k = 0; k < 6; ++k) q[6 * i + k] = v[k];
     }
   }
-  if (graph_.friction >= 0) {
-    double* q = st.data(graph_.friction, b);
-    for (size_t i = 0; i < p.planes.size(); ++i) {
-      q[2 * i] = p.planes[i].friction;
-      q[2 * i + 1] = p.planes[i].friction_velocity;
-    }
+  // Parameters that feed a graph input entry as they are (parameter_table.h).
+  for (const ParameterRow& row : parameter_table(p)) {
+    if (row.graph_component < 0) continue;
+    const int t = graph_.graph.find_tensor(row.graph_input);
+    if (t >= 0) st.data(t, b)[row.graph_component] = row.get(p);
   }
   double* fixed = st.data(graph_.fixed, b);
   for (int i = 0; i < grid_.node_count; ++i) fixed[i] = fixed_[i];

@@ -19,7 +19,7 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, bool frictio
   if (plane_count > 0) t.ground_planes = g.add_input("ground_planes", D::Scalar, 6 * plane_count);
   g.set_plane_count(plane_count);
   friction = friction && plane_count > 0;
-  if (friction) t.friction = g.add_input("friction", D::Scalar, 2 * plane_count);
+  const int friction_values = friction ? g.add_input("friction", D::Scalar, 2 * plane_count) : -1;
   t.fixed = g.add_input("fixed", D::Node, 1);
   t.u_prev = g.add_state("u_prev", D::Node, 3);
   t.v_prev = g.add_state("v_prev", D::Node, 3);
@@ -49,7 +49,7 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, bool frictio
     if (friction) {
       g.add_op("friction",
                {G("u_prev", t.u_prev), G("v_prev", t.v_prev), P("ground_planes", t.ground_planes),
-                P("friction", t.friction), P("contact_force", point_force)},
+                P("friction", friction_values), P("contact_force", point_force)},
                {{"point_force", "contact_friction_force", D::Point, 3}, {"damping", "friction_damping", D::Node, 6}});
       point_force = g.find_tensor("contact_friction_force");
     }

@@ -9,7 +9,7 @@ struct TimestepGraph {
   Graph graph;
   // Inputs (per batch item): material, damping, gravity, time stepping, planes, fixed nodes.
   int youngs_modulus, poisson_ratio, density, mass_damping, stiffness_damping, gravity, dt, theta;
-  int ground_planes = -1, friction = -1, fixed;
+  int ground_planes = -1, fixed;
   // State read by the step and its successors written by it.
   int u_prev, v_prev, band_guess = -1;
   int u, v, band_u = -1, rotation, mass, lambda, mu, cg_iterations;

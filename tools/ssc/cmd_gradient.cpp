@@ -48,7 +48,10 @@ Command register_gradient(CLI::App& app) {
       overrides.push_back("solver.tolerance=1e-12");
       overrides.push_back("solver.extension_tolerance=1e-13");
     }
-    const Problem problem = load_problem(o->scene, overrides, o->observations, o->phi_max, o->params);
+    // Without --params every parameter is listed, friction's too: it is modelled (at the
+    // scene's mu, 0 by default, which changes no result) so that its gradient is true.
+    const Problem problem = load_problem(o->scene, overrides, o->observations, o->phi_max,
+                                         o->params.empty() ? std::vector<std::string>{"ground.friction"} : o->params);
     Simulation sim(problem.scene, problem.grid, 1, true);
     place_simulation(sim, o->device);
     const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
