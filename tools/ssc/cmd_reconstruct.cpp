@@ -149,8 +149,9 @@ void print_report(const ReconstructionResult& r, const nlohmann::json& convergen
               convergence["starts_within_1_percent_of_best_cost"].get<int>());
   for (size_t i = 0; i < r.names.size(); ++i) {
     const nlohmann::json& sp = convergence["spread_of_starts_within_1_percent"][r.names[i]];
-    std::printf("  %s = %.6g %s (nominal %.6g; starts within 1 %%: %.6g .. %.6g)\n", r.names[i].c_str(), best.final[i],
-                r.units[i].c_str(), r.nominal[i], sp["min"].get<double>(), sp["max"].get<double>());
+    const std::string unit = r.units[i] == "1" ? "" : " " + r.units[i];  // dimensionless: no unit
+    std::printf("  %s = %.6g%s (nominal %.6g; starts within 1 %%: %.6g .. %.6g)\n", r.names[i].c_str(), best.final[i],
+                unit.c_str(), r.nominal[i], sp["min"].get<double>(), sp["max"].get<double>());
   }
   if (!convergence["converged"].get<bool>())
     std::printf("NOT CONVERGED: the best start stopped at the iteration limit; raise --iterations\n");
