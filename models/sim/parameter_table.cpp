@@ -85,24 +85,6 @@ void add_plane_rows(std::vector<ParameterRow>& rows, size_t k) {
   height.set = [k](PhysicalParameters& p, double v) { p.planes[k].height = v; };
   height.gradient = [k](const ParameterGradient& g, const PhysicalParameters&) { return g.plane_height[k]; };
   rows.push_back(height);
-  for (const bool velocity : {false, true}) {  // ops/friction.h: mu and the smoothing velocity
-    ParameterRow r;
-    r.name = prefix + (velocity ? "friction_velocity" : "friction");
-    r.unit = velocity ? "m/s" : "1";
-    if (velocity) r.length = 1, r.time = -1;
-    r.transform = velocity ? ParameterRow::Transform::Positive : ParameterRow::Transform::Bounded;
-    if (!velocity) r.optimiser_lower = 0, r.optimiser_upper = 2;
-    r.lower = 0, r.lower_inclusive = !velocity;
-    r.scene_key = key + (velocity ? "friction_velocity" : "friction");
-    r.graph_input = "friction";
-    r.graph_component = 2 * int(k) + (velocity ? 1 : 0);
-    r.get = [k, velocity](const PhysicalParameters& p) { return velocity ? p.planes[k].friction_velocity : p.planes[k].friction; };
-    r.set = [k, velocity](PhysicalParameters& p, double v) { (velocity ? p.planes[k].friction_velocity : p.planes[k].friction) = v; };
-    r.gradient = [c = r.graph_component](const ParameterGradient& g, const PhysicalParameters&) {
-      return g.input_entry("friction", c);
-    };
-    rows.push_back(r);
-  }
   for (const bool is_polar : {true, false}) {
     ParameterRow r;
     r.name = prefix + (is_polar ? "polar_deg" : "azimuth_deg");
@@ -126,6 +108,24 @@ void add_plane_rows(std::vector<ParameterRow>& rows, size_t k) {
     };
     r.gradient = [k, is_polar](const ParameterGradient& g, const PhysicalParameters& p) {
       return angle_gradient(g, p, k, is_polar);
+    };
+    rows.push_back(r);
+  }
+  for (const bool velocity : {false, true}) {  // ops/friction.h: mu and the smoothing velocity
+    ParameterRow r;
+    r.name = prefix + (velocity ? "friction_velocity" : "friction");
+    r.unit = velocity ? "m/s" : "1";
+    if (velocity) r.length = 1, r.time = -1;
+    r.transform = velocity ? ParameterRow::Transform::Positive : ParameterRow::Transform::Bounded;
+    if (!velocity) r.optimiser_lower = 0, r.optimiser_upper = 2;
+    r.lower = 0, r.lower_inclusive = !velocity;
+    r.scene_key = key + (velocity ? "friction_velocity" : "friction");
+    r.graph_input = "friction";
+    r.graph_component = 2 * int(k) + (velocity ? 1 : 0);
+    r.get = [k, velocity](const PhysicalParameters& p) { return velocity ? p.planes[k].friction_velocity : p.planes[k].friction; };
+    r.set = [k, velocity](PhysicalParameters& p, double v) { (velocity ? p.planes[k].friction_velocity : p.planes[k].friction) = v; };
+    r.gradient = [c = r.graph_component](const ParameterGradient& g, const PhysicalParameters&) {
+      return g.input_entry("friction", c);
     };
     rows.push_back(r);
   }
