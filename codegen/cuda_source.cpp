@@ -20,17 +20,16 @@ const EmbeddedFile* find_embedded(const std::string& path) {
   return nullptr;
 }
 
-// Pastes header `path` after its ops/ dependencies; include lines and #pragma once become
-// comments so that line numbers stay right.
+// Pastes header `path` after its embedded dependencies (ops/*.h, codegen/*.cuh); include
+// lines and #pragma once become comments so that line numbers stay right.
 void paste(const std::string& path, std::set<std::string>& done, std::string& out) {
   if (!done.insert(path).second) return;
   const EmbeddedFile* f = find_embedded(path);
-  if (!f) throw std::runtime_error("codegen: op header " + path + " is not embedded");
+  if (!f) throw std::runtime_error("codegen: header " + path + " is not embedded");
   std::istringstream in(f->text);
   std::string line, body;
   while (std::getline(in, line)) {
-    const std::string key = "#include \"ops/";
-    if (line.rfind(key, 0) == 0) {
+    if (line.rfind("#include \"ops/", 0) == 0 || line.rfind("#include \"codegen/", 0) == 0) {
       const std::string dep = line.substr(10, line.find('"', 10) - 10);
       paste(dep, done, out);
       body += "// " + line + " (pasted above)\n";
@@ -73,6 +72,7 @@ std::string kernel_prelude(const CodegenOptions& o) {
   s += "#line 1 \"ssc_generated_prelude\"\n";
   s += fmt::format("typedef {} Real;\n", o.real);
   paste("codegen/device_helpers.cuh", done, s);
+  paste("codegen/solver_kernels.cuh", done, s);
   s += "using namespace ssc;\n";
   return s;
 }

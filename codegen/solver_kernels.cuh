@@ -1,0 +1,716 @@
+// Device code of the solver stages (codegen/solver_snippets.cpp): the Newmark and band
+// Laplacian stage bodies, the block-per-item Jacobi-PCG kernels and the persistent grid
+// PCG solves. A stage's fragment is a call of a function here with the kernel's bindings
+// (pointers already offset to the batch item; tensors as pointers, read where they are
+// used). Pasted into every kernel's prelude after device_helpers.cuh
+// (codegen/cuda_source.cpp), so NVRTC compiles it with every kernel. Everything is
+// __forceinline__ or a lambda inside one: the solves must inline into their kernel whole
+// (incidence in registers, the value(source, m) recomputation, no calls in the hot loop).
+#pragma once
+#include "codegen/device_helpers.cuh"
+#include "ops/corotation.h"
+#include "ops/elasticity.h"
+#include "ops/gather.h"
+#include "ops/newmark.h"
+#include "ops/ssc_math.h"
+namespace ssc {
+namespace gen {
+
+// The component-wise product (a Jacobi diagonal times a vector).
+template <class R>
+__device__ __forceinline__ Vec3<R> times(Vec3<R> a, Vec3<R> b) {
+  return make_vec3(a.x * b.x, a.y * b.y, a.z * b.z);
+}
+
+// The optional node-local damping matrix C of the time-step system (friction,
+// ops/newmark.h): a fragment passes its pointer, or nullptr when the op's slot is unbound;
+// the two are overloads, so an undamped kernel has no trace of C (no run-time test).
+using NoDamping = decltype(nullptr);
+
+// y + C e at node n.
+template <class R>
+__device__ __forceinline__ Vec3<R> add_damping(Vec3<R> y, const R* damping, int n, Vec3<R> e) {
+  return y + ops::sym3_apply(damping, n, e);
+}
+template <class R>
+__device__ __forceinline__ Vec3<R> add_damping(Vec3<R> y, NoDamping, int, Vec3<R>) {
+  return y;
+}
+// d + the diagonal of C at node n.
+template <class R>
+__device__ __forceinline__ void add_damping_diagonal(Vec3<R>& d, const R* damping, int n) {
+  d += make_vec3(damping[6 * n], damping[6 * n + 1], damping[6 * n + 2]);
+}
+template <class R>
+__device__ __forceinline__ void add_damping_diagonal(Vec3<R>&, NoDamping, int) {}
+// C's cotangent for y = C p and the cotangent y_bar.
+template <class R>
+__device__ __forceinline__ void adj_damping(R* damping_bar, int n, Vec3<R> p, Vec3<R> y_bar) {
+  ops::adj_sym3_apply(damping_bar, n, p, y_bar);
+}
+template <class R>
+__device__ __forceinline__ void adj_damping(NoDamping, int, Vec3<R>, Vec3<R>) {}
+
+// (A + C) e at node n given (K e) there: the time-step system's node part.
+template <class R, class Damping>
+__device__ __forceinline__ Vec3<R> newmark_node_apply(const ops::NewmarkCoefficients<R>& c, const R* mass,
+                                                      Damping damping, int n, Vec3<R> e, Vec3<R> ke) {
+  return add_damping(ops::newmark_system_apply(c, mass[n], e, ke), damping, n, e);
+}
+
+// ---- Newmark stages (one thread per node, cell or cell corner i) ----
+
+// u = u- + dt v- (the solve's initial guess), 0 on fixed nodes.
+template <class R>
+__device__ __forceinline__ void newmark_init(int i, const R* dt, const R* u_prev, const R* v_prev, const R* fixed,
+                                             R* u) {
+  for (int k = 0; k < 3; ++k)
+    u[3 * i + k] = fixed[i] != R(0) ? R(0) : u_prev[3 * i + k] + dt[0] * v_prev[3 * i + k];
+}
+
+// Corner i & 7 of cell i >> 3 of the stiffness diagonal.
+template <class R>
+__device__ __forceinline__ void newmark_diagonal_corner(int i, R h, const R* rotation, const R* cell_weights,
+                                                        const R* lambda, const R* mu, R* corner) {
+  const int cell = i >> 3;
+  store3(corner, i,
+         ops::corotated_diagonal_corner(ops::load_mat3(rotation, cell), cell_weights + 8 * cell, lambda[0], mu[0], h,
+                                        i & 7));
+}
+
+// Node i: the Jacobi diagonal from the corner diagonals, the masked right-hand side, and
+// x = 0 on fixed nodes (everywhere when zero_x).
+template <class R, class Damping>
+__device__ __forceinline__ void newmark_setup(int i, const ops::NewmarkCoefficients<R>& c, const R* mass,
+                                              const R* fixed, Damping damping, const R* corner,
+                                              const int* node_cell_offset, const int* node_cell_entry, const R* rhs,
+                                              int zero_x, R* x, R* b, R* inv_diag) {
+  const Vec3<R> kd = ops::gather_corner_sum(corner, node_cell_offset, node_cell_entry, i);
+  Vec3<R> d = ops::newmark_system_apply(c, mass[i], make_vec3(R(1), R(1), R(1)), kd);
+  add_damping_diagonal(d, damping, i);
+  const bool is_fixed = fixed[i] != R(0);
+  for (int k = 0; k < 3; ++k) {
+    inv_diag[3 * i + k] = is_fixed ? R(1) : R(1) / d[k];
+    b[3 * i + k] = is_fixed ? R(0) : rhs[3 * i + k];
+    if (is_fixed || zero_x) x[3 * i + k] = R(0);
+  }
+}
+
+// Cell i: the corners of R K R^T p.
+template <class R>
+__device__ __forceinline__ void newmark_apply_cell(int i, R h, const R* rotation, const R* cell_weights,
+                                                   const int* cell_nodes, const R* lambda, const R* mu, const R* p,
+                                                   R* corner) {
+  Vec3<R> pc[8], y[8];
+  ops::load_cell_corners(p, cell_nodes, i, pc);
+  ops::corotated_apply(ops::load_mat3(rotation, i), cell_weights + 8 * i, lambda[0], mu[0], h, pc, y);
+  for (int k = 0; k < 8; ++k) store3(corner, 8 * i + k, y[k]);
+}
+
+// Node i: q = (A + C) p from the corners, q = p on fixed nodes.
+template <class R, class Damping>
+__device__ __forceinline__ void newmark_apply_node(int i, const ops::NewmarkCoefficients<R>& c, const R* mass,
+                                                   const R* fixed, Damping damping, const R* corner,
+                                                   const int* node_cell_offset, const int* node_cell_entry,
+                                                   const R* p, R* q) {
+  const Vec3<R> kp = ops::gather_corner_sum(corner, node_cell_offset, node_cell_entry, i);
+  store3(q, i, fixed[i] != R(0) ? load3(p, i) : newmark_node_apply(c, mass, damping, i, load3(p, i), kp));
+}
+
+// ---- The Newmark adjoint's parameter terms, after the adjoint solve w = A^-1 u_bar ----
+
+// Node i: rhs_bar += w.
+template <class R>
+__device__ __forceinline__ void newmark_solve_rhs(int i, const R* w, R* rhs_bar) {
+  for (int k = 0; k < 3; ++k) rhs_bar[3 * i + k] += w[3 * i + k];
+}
+
+// Cell i: the rotation's and the Lame parameters' share of -w^T A u (Lame shares into
+// red[2 i], red[2 i + 1]), and the corners of K u into ku.
+template <class R>
+__device__ __forceinline__ void newmark_solve_cell(int i, const ops::NewmarkCoefficients<R>& c, R h,
+                                                   const R* rotation, const R* cell_weights, const int* cell_nodes,
+                                                   const R* lambda, const R* mu, const R* u, const R* w,
+                                                   R* rotation_bar, R* ku, R* red) {
+  Vec3<R> pc[8], yb[8], pb[8], y[8];
+  ops::load_cell_corners(u, cell_nodes, i, pc);
+  for (int k = 0; k < 8; ++k) {
+    yb[k] = (-c.a_k) * load3(w, cell_nodes[8 * i + k]);
+    pb[k] = zero3<R>();
+  }
+  const Mat3<R> Rm = ops::load_mat3(rotation, i);
+  Mat3<R> R_bar = zero33<R>();
+  R l = R(0), mm = R(0);
+  ops::adj_corotated_apply(Rm, cell_weights + 8 * i, lambda[0], mu[0], h, pc, yb, R_bar, l, mm, pb);
+  ops::add_mat3(rotation_bar, i, R_bar);
+  ops::corotated_apply(Rm, cell_weights + 8 * i, lambda[0], mu[0], h, pc, y);
+  for (int k = 0; k < 8; ++k) store3(ku, 8 * i + k, y[k]);
+  red[2 * i] = l;
+  red[2 * i + 1] = mm;
+}
+
+// Node i: the mass's and C's share of -w^T A u, the coefficients' shares into red2[2 i],
+// red2[2 i + 1] (0 on fixed nodes). damping_bar: C's cotangent (or nullptr).
+template <class R, class DampingBar>
+__device__ __forceinline__ void newmark_solve_node(int i, const ops::NewmarkCoefficients<R>& c, const R* mass,
+                                                   const R* fixed, const R* u, const R* w, const R* ku,
+                                                   const int* node_cell_offset, const int* node_cell_entry,
+                                                   R* mass_bar, DampingBar damping_bar, double* red2) {
+  if (fixed[i] != R(0)) {
+    red2[2 * i] = 0;
+    red2[2 * i + 1] = 0;
+    return;
+  }
+  const Vec3<R> kui = ops::gather_corner_sum(ku, node_cell_offset, node_cell_entry, i);
+  Vec3<R> ub = zero3<R>(), kb = zero3<R>();
+  ops::NewmarkCoefficientBars<R> cb;
+  ops::adj_newmark_system_apply(c, mass[i], load3(u, i), kui, R(-1) * load3(w, i), mass_bar[i], ub, kb, cb);
+  adj_damping(damping_bar, i, load3(u, i), R(-1) * load3(w, i));
+  red2[2 * i] = double(cb.a_m);
+  red2[2 * i + 1] = double(cb.a_k);
+}
+
+// Block per item: the cells' and nodes' shares summed in a fixed order into the
+// cotangents of lambda, mu and the damping coefficients.
+template <class R>
+__device__ __forceinline__ void newmark_solve_reduce(int i, int n_cell, int n_node, const R* red, const double* red2,
+                                                     R* lambda_bar, R* mu_bar, R* mass_damping_bar,
+                                                     R* stiffness_damping_bar) {
+  double v[4] = {0, 0, 0, 0};
+  for (int e = i; e < n_cell; e += SSC_ITEM) {
+    v[0] += double(red[2 * e]);
+    v[1] += double(red[2 * e + 1]);
+  }
+  for (int k = i; k < n_node; k += SSC_ITEM) {
+    v[2] += red2[2 * k];
+    v[3] += red2[2 * k + 1];
+  }
+  block_sum<4>(v);
+  if (i == 0) {
+    lambda_bar[0] += R(v[0]);
+    mu_bar[0] += R(v[1]);
+    mass_damping_bar[0] += R(v[2]);
+    stiffness_damping_bar[0] += R(v[3]);
+  }
+}
+
+// ---- Band Laplacian stages (one thread per band node or node i) ----
+
+// Band node i: b = the sum of u over its active (off-band) neighbours, x = the guess,
+// the Jacobi diagonal 1 / deg.
+template <class R>
+__device__ __forceinline__ void extension_setup(int i, const R* u, const R* band_guess, const int* band_neighbors,
+                                                const int* band_degree, R* band_u, R* b, R* inv_diag) {
+  Vec3<R> s = zero3<R>();
+  for (int d = 0; d < 6; ++d) {
+    const int nb = band_neighbors[6 * i + d];
+    if (nb <= -2) s += load3(u, -nb - 2);
+  }
+  store3(b, i, s);
+  for (int k = 0; k < 3; ++k) {
+    band_u[3 * i + k] = band_guess[3 * i + k];
+    inv_diag[3 * i + k] = R(1) / R(band_degree[i]);
+  }
+}
+
+// Band node i of the adjoint solve: b = band_u's cotangent, x = 0 when zero_x, 1 / deg.
+template <class R>
+__device__ __forceinline__ void extension_adj_setup(int i, const R* band_u_bar, const int* band_degree, int zero_x,
+                                                    R* x, R* b, R* inv_diag) {
+  for (int k = 0; k < 3; ++k) {
+    b[3 * i + k] = band_u_bar[3 * i + k];
+    if (zero_x) x[3 * i + k] = R(0);
+    inv_diag[3 * i + k] = R(1) / R(band_degree[i]);
+  }
+}
+
+// Band node i: q = L p.
+template <class R>
+__device__ __forceinline__ void extension_apply(int i, const int* band_neighbors, const int* band_degree, const R* p,
+                                                R* q) {
+  Vec3<R> s = R(band_degree[i]) * load3(p, i);
+  for (int d = 0; d < 6; ++d) {
+    const int nb = band_neighbors[6 * i + d];
+    if (nb >= 0) s -= load3(p, nb);
+  }
+  store3(q, i, s);
+}
+
+// Node i: u_bar += the adjoint solution y at the band nodes that read node i.
+template <class R>
+__device__ __forceinline__ void extension_solve_node(int i, const int* node_band_offset, const int* node_band_entry,
+                                                     const R* y, R* u_bar) {
+  for (int k = node_band_offset[i]; k < node_band_offset[i + 1]; ++k) add3(u_bar, i, load3(y, node_band_entry[k]));
+}
+
+// ---- Block-per-item Jacobi-PCG (Extent::Item) ----
+//
+// One block of SSC_ITEM threads per batch item: thread i walks k = i, i + SSC_ITEM, ...
+// of the vectors (length len), its partial dot products meet in block_sum (a fixed tree:
+// bitwise reproducible), and every thread gets the totals, so the scalar update, the
+// axpys and the direction update run in the same launch. One CG iteration is the
+// operator's apply kernels plus pcg_iterate. Solver state cg (16 doubles per item):
+// 0 |b|, 1 r.z, 2 |r|, 3 p.q, 4 step, 5 beta, 6 active, 7 iterations, 8 relative
+// residual, 9 converged.
+
+// Whether an apply kernel of a host-driven loop (gate != 0) finds the item's solve stopped.
+__device__ __forceinline__ bool pcg_stopped(int gate, const double* cg) { return gate != 0 && cg[6] == 0.0; }
+
+// The convergence test of runtime/pcg.h on the state.
+__device__ __forceinline__ void pcg_check(double* cg, double tol, int max_it) {
+  if (cg[0] == 0.0) {
+    cg[6] = 0;
+    cg[9] = 1;
+    cg[8] = 0;
+  } else {
+    cg[8] = cg[2] / cg[0];
+    if (cg[8] <= tol) {
+      cg[6] = 0;
+      cg[9] = 1;
+    } else if (cg[7] >= double(max_it) || !isfinite(cg[2])) {
+      cg[6] = 0;
+      cg[9] = 0;
+    } else {
+      cg[6] = 1;
+    }
+  }
+}
+
+// |b|, r = b - q (q = A x), z = M^-1 r, p = z, r.z, |r|, the test; x = 0 when b = 0.
+template <class R>
+__device__ __forceinline__ void pcg_start(int i, int len, double tol, int max_it, const R* b, const R* q,
+                                          const R* inv_diag, R* x, R* r, R* z, R* p, double* cg) {
+  double acc[3] = {0, 0, 0};
+  for (int k = i; k < len; k += SSC_ITEM) {
+    const R bk = b[k];
+    const R rk = bk - q[k];
+    const R zk = inv_diag[k] * rk;
+    r[k] = rk;
+    z[k] = zk;
+    p[k] = zk;
+    acc[0] += double(bk) * double(bk);
+    acc[1] += double(rk) * double(zk);
+    acc[2] += double(rk) * double(rk);
+  }
+  block_sum<3>(acc);
+  const double b_norm = sqrt(acc[0]);
+  if (b_norm == 0.0)
+    for (int k = i; k < len; k += SSC_ITEM) x[k] = R(0);
+  if (i == 0) {
+    for (int k = 0; k < 16; ++k) cg[k] = 0;
+    cg[0] = b_norm;
+    cg[1] = acc[1];
+    cg[2] = sqrt(acc[2]);
+    pcg_check(cg, tol, max_it);
+  }
+}
+
+// One iteration given q = A p: p.q, step, x += step p, r -= step q, z = M^-1 r, r.z, |r|,
+// beta, p = z + beta p, the test. Returns at once when the item has stopped.
+template <class R>
+__device__ __forceinline__ void pcg_iterate(int i, int len, double tol, int max_it, const R* q, const R* inv_diag,
+                                            R* x, R* r, R* z, R* p, double* cg) {
+  if (cg[6] == 0.0) return;  // stopped (uniform over the block)
+  const double rz = cg[1];
+  double pq[1] = {0};
+  for (int k = i; k < len; k += SSC_ITEM) pq[0] += double(p[k]) * double(q[k]);
+  block_sum<1>(pq);
+  const R step = R(rz / pq[0]);
+  double acc[2] = {0, 0};
+  for (int k = i; k < len; k += SSC_ITEM) {
+    x[k] += step * p[k];
+    const R rk = r[k] - step * q[k];
+    const R zk = inv_diag[k] * rk;
+    r[k] = rk;
+    z[k] = zk;
+    acc[0] += double(rk) * double(zk);
+    acc[1] += double(rk) * double(rk);
+  }
+  block_sum<2>(acc);
+  const R beta = R(acc[0] / rz);
+  for (int k = i; k < len; k += SSC_ITEM) p[k] = z[k] + beta * p[k];
+  if (i == 0) {
+    cg[3] = pq[0];
+    cg[4] = double(step);
+    cg[5] = double(beta);
+    cg[1] = acc[0];
+    cg[2] = sqrt(acc[1]);
+    cg[7] += 1;
+    pcg_check(cg, tol, max_it);
+  }
+}
+
+// ---- Persistent grid solves (Extent::Grid) ----
+//
+// One cooperative kernel runs a whole Jacobi-PCG solve for every batch item: gridDim.x
+// blocks per item, the item's blocks meeting at grid barriers. The iteration is the
+// Chronopoulos-Gear form of PCG (the same iterates as runtime/pcg.h in exact arithmetic,
+// one reduction per iteration instead of two):
+//   s = w + beta s,  p = u + beta p,  x += alpha p,  r -= alpha s,  u = M^-1 r,  w = A u,
+//   gamma' = r.u,  delta = w.u,  beta = gamma' / gamma,
+//   alpha = gamma' / (delta - beta gamma' / alpha).
+// The apply A u needs u at neighbouring nodes before their owners have updated it, so
+// every thread evaluates u there from the previous iteration's r, w, s (GridPcg::next_u):
+// the same expression, the same bits as the owner's (grid_own_update). Each thread owns
+// the same nodes (n = rank, rank + threads, ...) in every phase. The final state goes to
+// cg, to slot log_slot of cg_log (read by the host once per step) and the iteration
+// count to iterations[0].
+
+// The operand of an apply at node m: the start's x or u, or the loop's next u.
+enum Source : int { kSourceX = 0, kSourceU = 1, kSourceNextU = 2 };
+
+// A grid solve's vectors, state and grid plumbing (one batch item).
+template <class R>
+struct GridPcg {
+  R* x;
+  const R* b;
+  const R* inv_diag;
+  R *r, *w, *s, *z, *p;
+  R* iterations;
+  double tol;
+  int max_it, log_slot;
+  double *cg, *cg_log;
+  unsigned long long* bar;
+  // Consecutive sums alternate between two partial-sum buffers: a block may write the
+  // next sum's partials while another still reads this one's.
+  double *partial0, *partial1;
+  int parity = 0;
+  int rank, threads;
+  R step = R(0), beta = R(0);  // alpha and beta of the iteration under way
+
+  // partial holds 2 * half doubles; barrier is the kernel's barrier counter.
+  __device__ __forceinline__ GridPcg(R* x_, const R* b_, const R* inv_diag_, R* r_, R* w_, R* s_, R* z_, R* p_,
+                                     R* iterations_, double tol_, int max_it_, int log_slot_, double* cg_,
+                                     double* cg_log_, double* partial, int half, double* barrier)
+      : x(x_), b(b_), inv_diag(inv_diag_), r(r_), w(w_), s(s_), z(z_), p(p_), iterations(iterations_), tol(tol_),
+        max_it(max_it_), log_slot(log_slot_), cg(cg_), cg_log(cg_log_),
+        bar(reinterpret_cast<unsigned long long*>(barrier)), partial0(partial), partial1(partial + half),
+        rank(grid_rank()), threads(grid_threads()) {}
+
+  template <int N>
+  __device__ __forceinline__ void sum(double (&v)[N]) {
+    grid_sum<N>(v, parity ? partial1 : partial0, bar);
+    parity ^= 1;
+  }
+  // u_{k+1} at node m from the previous iteration's vectors in r_old, w_old, s_old.
+  __device__ __forceinline__ Vec3<R> next_u(const R* r_old, const R* w_old, const R* s_old, int m) const {
+    const Vec3<R> sm = load3(w_old, m) + beta * load3(s_old, m);
+    return times(load3(inv_diag, m), load3(r_old, m) - step * sm);
+  }
+};
+
+// gamma += r.u, delta += w.u, |r|^2 += r.r at one node.
+template <class R>
+__device__ __forceinline__ void add_pcg_sums(double (&acc)[3], Vec3<R> rn, Vec3<R> un, Vec3<R> wn) {
+  for (int k = 0; k < 3; ++k) {
+    acc[0] += double(rn[k]) * double(un[k]);
+    acc[1] += double(wn[k]) * double(un[k]);
+    acc[2] += double(rn[k]) * double(rn[k]);
+  }
+}
+
+// The start's first half over the thread's own nodes (count of them in all), given
+// q_of_x(n) = (A x)(n): r = b - q, u = M^-1 r, s = p = 0 (the previous directions).
+// Returns the thread's share of |b|^2; ends with a grid barrier.
+template <class R, class QofX>
+__device__ __forceinline__ double grid_start_residual(GridPcg<R>& g, int count, R* r, R* s, QofX q_of_x) {
+  double bb = 0;
+  for (int n = g.rank; n < count; n += g.threads) {
+    const Vec3<R> q = q_of_x(n);
+    const Vec3<R> bn = load3(g.b, n), rn = bn - q;
+    store3(r, n, rn);
+    store3(g.z, n, times(load3(g.inv_diag, n), rn));
+    store3(s, n, zero3<R>());
+    store3(g.p, n, zero3<R>());
+    for (int k = 0; k < 3; ++k) bb += double(bn[k]) * double(bn[k]);
+  }
+  grid_sync(g.bar);
+  return bb;
+}
+
+// The start's second half, once u = M^-1 r is complete: w = A u at the own nodes from
+// w_of_u(n, un) (which sets un = u(n)), stored in w; acc = {gamma, delta, |r|^2} and bb
+// = |b|^2 (the first half's shares) summed over the item in one grid sum.
+template <class R, class WofU>
+__device__ __forceinline__ void grid_start_sums(GridPcg<R>& g, int count, const R* r, R* w, WofU w_of_u, double& bb,
+                                                double (&acc)[3]) {
+  for (int k = 0; k < 3; ++k) acc[k] = 0;
+  for (int n = g.rank; n < count; n += g.threads) {
+    Vec3<R> un;
+    const Vec3<R> wn = w_of_u(n, un);
+    const Vec3<R> rn = load3(r, n);
+    store3(w, n, wn);
+    add_pcg_sums(acc, rn, un, wn);
+  }
+  double sums[4] = {acc[0], acc[1], acc[2], bb};
+  g.sum(sums);
+  for (int k = 0; k < 3; ++k) acc[k] = sums[k];
+  bb = sums[3];
+}
+
+// The own-node update of one iteration at node n: s, p, x, r, u from the previous r, w,
+// s, and w = w_of_u(n, u) = A u; written to r_out, w_out, s_out (which may be r, w, s);
+// the node's sums into acc.
+template <class R, class WofU>
+__device__ __forceinline__ void grid_own_update(GridPcg<R>& g, int n, const R* r, const R* w, const R* s, R* r_out,
+                                                R* w_out, R* s_out, WofU w_of_u, double (&acc)[3]) {
+  const Vec3<R> sn = load3(w, n) + g.beta * load3(s, n);
+  const Vec3<R> pn = load3(g.z, n) + g.beta * load3(g.p, n);
+  const Vec3<R> rn = load3(r, n) - g.step * sn;
+  const Vec3<R> un = times(load3(g.inv_diag, n), rn);
+  const Vec3<R> wn = w_of_u(n, un);
+  store3(g.x, n, load3(g.x, n) + g.step * pn);
+  store3(s_out, n, sn);
+  store3(g.p, n, pn);
+  store3(r_out, n, rn);
+  store3(g.z, n, un);
+  store3(w_out, n, wn);
+  add_pcg_sums(acc, rn, un, wn);
+}
+
+// From the start's sums (start = {gamma, delta, |r|^2}, bb = |b|^2): the convergence test
+// of runtime/pcg.h, the loop (iteration(acc) adds the new sums into acc), the final state.
+template <class R, class Iteration>
+__device__ __forceinline__ void grid_loop(GridPcg<R>& g, int count, const double (&start)[3], double bb,
+                                          Iteration iteration) {
+  const double b_norm = sqrt(bb);
+  double gamma = start[0], alpha = start[0] / start[1], r_norm = sqrt(start[2]), rel = 0;
+  int its = 0;
+  bool active = false, converged = false;
+  auto test = [&]() {
+    rel = r_norm / b_norm;
+    active = false;
+    converged = false;
+    if (rel <= g.tol) converged = true;
+    else if (its < g.max_it && isfinite(r_norm)) active = true;
+  };
+  if (b_norm == 0.0) {
+    for (int n = g.rank; n < count; n += g.threads) store3(g.x, n, zero3<R>());
+    converged = true;
+  } else {
+    test();
+  }
+  g.step = R(alpha);
+  while (active) {
+    double acc[3] = {0, 0, 0};
+    iteration(acc);
+    g.sum(acc);
+    const double gamma_next = acc[0];
+    const double beta_next = gamma_next / gamma;
+    alpha = gamma_next / (acc[1] - beta_next * gamma_next / alpha);
+    gamma = gamma_next;
+    g.step = R(alpha);
+    g.beta = R(beta_next);
+    r_norm = sqrt(acc[2]);
+    ++its;
+    test();
+  }
+  if (g.rank == 0) {
+    const double st[10] = {b_norm, gamma, r_norm, 0, alpha, double(g.beta), 0, double(its), rel,
+                           converged ? 1.0 : 0.0};
+    for (int k = 0; k < 16; ++k) {
+      g.cg[k] = k < 10 ? st[k] : 0.0;
+      g.cg_log[16 * g.log_slot + k] = g.cg[k];
+    }
+    g.iterations[0] = R(its);
+  }
+}
+
+// The time-step system (A + C on the free nodes, identity on fixed ones) in one kernel:
+// per phase the element apply over cell corners (newmark_apply_cell), a grid barrier, the
+// node gather (newmark_apply_node) with the own-node update; r, w, s are updated in place
+// (the cell phase that reads them at other nodes is over when the node phase writes).
+template <class R, class Damping>
+__device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::NewmarkCoefficients<R>& c, int n_cell,
+                                                 int n_node, R h, const R* rotation, const R* cell_weights,
+                                                 const int* cell_nodes, const R* lambda, const R* mu, const R* mass,
+                                                 const R* fixed, Damping damping, const int* node_cell_offset,
+                                                 const int* node_cell_entry, R* corner) {
+  const int rank = g.rank, threads = g.threads;
+  auto value = [&](int source, int m) {
+    return source == kSourceX ? load3(g.x, m) : source == kSourceU ? load3(g.z, m) : g.next_u(g.r, g.w, g.s, m);
+  };
+  // The thread's first cell corner and node keep their incidence in registers for the
+  // whole solve (one load chain less per phase); further ones (small grids) load it.
+  const int corner_node = rank < 8 * n_cell ? cell_nodes[rank] : 0;
+  int node_entry[8], node_entries = 0;
+  if (rank < n_node) {
+    const int first = node_cell_offset[rank];
+    node_entries = node_cell_offset[rank + 1] - first;
+#pragma unroll
+    for (int k = 0; k < 8; ++k) node_entry[k] = k < node_entries ? node_cell_entry[first + k] : 0;
+  }
+  // Corners of R K R^T e per cell for the nodal values e = value(source, node)
+  // (newmark_apply_cell's corotated_apply), eight lanes per cell: lane c rotates corner c,
+  // gets its edge neighbours' rotated vectors and stress columns by warp shuffles,
+  // assembles corner c.
+  auto cells = [&](int source) {
+    const int lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
+    for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop
+      const bool valid = t < lanes;
+      const int e = valid ? t >> 3 : 0, k = t & 7;
+      const int nd = !valid ? 0 : t == rank ? corner_node : cell_nodes[t];
+      const Mat3<R> Rm = ops::load_mat3(rotation, e);
+      const Vec3<R> q = mul_transposed(Rm, value(source, nd));
+      const Vec3<R> qn[3] = {shfl_xor3(q, 1), shfl_xor3(q, 2), shfl_xor3(q, 4)};
+      Vec3<R> col[3];
+      ops::element_corner_columns(k, cell_weights[t], lambda[0], mu[0], h, q, qn, col);
+      const Vec3<R> y =
+          Rm * ops::element_corner_assemble(col, shfl_xor3(col[0], 1), shfl_xor3(col[1], 2), shfl_xor3(col[2], 4));
+      if (valid) store3(corner, t, y);
+    }
+    grid_sync(g.bar);
+  };
+  // (A + C) e at node n for the node value e (newmark_apply_node; the same sum order as
+  // ops::gather_corner_sum).
+  auto node_apply = [&](int n, Vec3<R> e) {
+    Vec3<R> kp = zero3<R>();
+    if (n == rank && node_entries <= 8) {
+#pragma unroll
+      for (int k = 0; k < 8; ++k)
+        if (k < node_entries) kp += load3(corner, node_entry[k]);
+    } else {
+      kp = ops::gather_corner_sum(corner, node_cell_offset, node_cell_entry, n);
+    }
+    return fixed[n] != R(0) ? e : newmark_node_apply(c, mass, damping, n, e, kp);
+  };
+  cells(kSourceX);
+  double bb = grid_start_residual(g, n_node, g.r, g.s, [&](int n) { return node_apply(n, load3(g.x, n)); });
+  cells(kSourceU);
+  double start[3];
+  grid_start_sums(
+      g, n_node, g.r, g.w,
+      [&](int n, Vec3<R>& un) {
+        un = load3(g.z, n);
+        return node_apply(n, un);
+      },
+      bb, start);
+  grid_loop(g, n_node, start, bb, [&](double (&acc)[3]) {
+    cells(kSourceNextU);
+    for (int n = rank; n < n_node; n += threads) grid_own_update(g, n, g.r, g.w, g.s, g.r, g.w, g.s, node_apply, acc);
+  });
+}
+
+// The band solves' incidence: the thread's first band node keeps its degree and
+// neighbours in registers.
+struct BandIncidence {
+  const int* neighbors;
+  const int* degrees;
+  int rank;
+  int own_nb[6];
+  int own_degree;
+
+  __device__ __forceinline__ BandIncidence(const int* band_neighbors, const int* band_degree, int n_band,
+                                           int thread_rank)
+      : neighbors(band_neighbors), degrees(band_degree), rank(thread_rank) {
+#pragma unroll
+    for (int d = 0; d < 6; ++d) own_nb[d] = rank < n_band ? neighbors[6 * rank + d] : -1;
+    own_degree = rank < n_band ? degrees[rank] : 0;
+  }
+  __device__ __forceinline__ int degree(int m) const { return m == rank ? own_degree : degrees[m]; }
+  // L e at band node n for the nodal values e = value(source, node); e(n) into en
+  // (extension_apply).
+  template <class R, class Value>
+  __device__ __forceinline__ Vec3<R> laplacian(int n, int source, const Value& value, Vec3<R>& en) const {
+    const bool mine = n == rank;
+    en = value(source, n);
+    Vec3<R> s = R(mine ? own_degree : degrees[n]) * en;
+#pragma unroll
+    for (int d = 0; d < 6; ++d) {
+      const int nb = mine ? own_nb[d] : neighbors[6 * n + d];
+      if (nb >= 0) s -= value(source, nb);
+    }
+    return s;
+  }
+};
+
+// The start of a band solve on the vectors r, s, w (L over value(source, node)).
+template <class R, class Value>
+__device__ __forceinline__ double band_start(GridPcg<R>& g, const BandIncidence& band, int n_band, const Value& value,
+                                             R* r, R* s, R* w, double (&start)[3]) {
+  double bb = grid_start_residual(g, n_band, r, s, [&](int n) {
+    Vec3<R> xn;
+    return band.laplacian(n, kSourceX, value, xn);
+  });
+  grid_start_sums(
+      g, n_band, r, w, [&](int n, Vec3<R>& un) { return band.laplacian(n, kSourceU, value, un); }, bb, start);
+  return bb;
+}
+
+// The band Laplacian L e(n) = deg(n) e(n) - sum of e over the band neighbours: one phase
+// per iteration, each thread evaluating u at its node's neighbours (next_u), so r, w, s
+// alternate between two buffers (r, r2 and so on: neighbours read the previous
+// iteration's while owners write the next).
+template <class R>
+__device__ __forceinline__ void extension_pcg_grid(GridPcg<R>& g, int n_band, const int* band_neighbors,
+                                                   const int* band_degree, R* r2, R* w2, R* s2) {
+  R *r_now = g.r, *w_now = g.w, *s_now = g.s, *r_next = r2, *w_next = w2, *s_next = s2;
+  auto value = [&](int source, int m) {
+    return source == kSourceX ? load3(g.x, m) : source == kSourceU ? load3(g.z, m) : g.next_u(r_now, w_now, s_now, m);
+  };
+  const BandIncidence band(band_neighbors, band_degree, n_band, g.rank);
+  double start[3];
+  const double bb = band_start(g, band, n_band, value, r_now, s_now, w_now, start);
+  grid_loop(g, n_band, start, bb, [&](double (&acc)[3]) {
+    for (int n = g.rank; n < n_band; n += g.threads) {
+      Vec3<R> u_own;
+      const Vec3<R> wn = band.laplacian(n, kSourceNextU, value, u_own);
+      grid_own_update(
+          g, n, r_now, w_now, s_now, r_next, w_next, s_next, [&](int, Vec3<R>) { return wn; }, acc);
+    }
+    R* t = r_now;
+    r_now = r_next;
+    r_next = t;
+    t = w_now;
+    w_now = w_next;
+    w_next = t;
+    t = s_now;
+    s_now = s_next;
+    s_next = t;
+  });
+}
+
+// The same solve for throughput, when each thread owns several band nodes (large
+// batches): two phases per iteration, the own-node update (s, p, x, r) and, after a grid
+// barrier, w = L u with u = M^-1 r read at the neighbours, then the reduction. Neighbours
+// read one stored vector instead of evaluating u from three, no vector is double
+// buffered, and the Jacobi diagonal 1/deg comes from the degree: per node five vectors
+// (x, r, w, s, p) instead of ten, so a batch's solver state stays in L2. Every value is
+// the same expression as in extension_pcg_grid, so both give the same bits.
+template <class R>
+__device__ __forceinline__ void extension_pcg_grid_two_phase(GridPcg<R>& g, int n_band, const int* band_neighbors,
+                                                             const int* band_degree) {
+  const BandIncidence band(band_neighbors, band_degree, n_band, g.rank);
+  // M^-1 = 1 / deg as a vector (extension_setup's inv_diag, the same bits).
+  auto inv_diag = [&](int m) {
+    const R d = R(1) / R(band.degree(m));
+    return make_vec3(d, d, d);
+  };
+  auto value = [&](int source, int m) {
+    return source == kSourceX ? load3(g.x, m) : times(inv_diag(m), load3(g.r, m));
+  };
+  double start[3];
+  const double bb = band_start(g, band, n_band, value, g.r, g.s, g.w, start);
+  grid_loop(g, n_band, start, bb, [&](double (&acc)[3]) {
+    for (int n = g.rank; n < n_band; n += g.threads) {
+      const Vec3<R> inv = inv_diag(n), rn_old = load3(g.r, n);
+      const Vec3<R> sn = load3(g.w, n) + g.beta * load3(g.s, n);
+      const Vec3<R> pn = times(inv, rn_old) + g.beta * load3(g.p, n);
+      store3(g.x, n, load3(g.x, n) + g.step * pn);
+      store3(g.s, n, sn);
+      store3(g.p, n, pn);
+      store3(g.r, n, rn_old - g.step * sn);
+    }
+    grid_sync(g.bar);
+    for (int n = g.rank; n < n_band; n += g.threads) {
+      Vec3<R> un;
+      const Vec3<R> wn = band.laplacian(n, kSourceU, value, un);
+      const Vec3<R> rn = load3(g.r, n);
+      store3(g.w, n, wn);
+      add_pcg_sums(acc, rn, un, wn);
+    }
+  });
+}
+
+}  // namespace gen
+}  // namespace ssc
