@@ -71,10 +71,7 @@ Snippet reduction_snippet(const Graph& g, int op, const PartSpec& p) {
       const ScratchSpec& sc = o.spec->scratch_spec(a.name);
       const int c = scratch_components(g, o, sc);
       b.scratch(a.name, scratch_name(a.name, op), o.spec->scratch_type(a.name), sc.domain, c, false);
-      sums += fmt::format(
-          "for (int e = i; e < {}; e += SSC_ITEM)\n"
-          "  for (int k = 0; k < {}; ++k) acc[{} + k] += double(${}[{} * e + k]);\n",
-          count_expr(sc.domain), c, total, a.name, c);
+      sums += fmt::format("gen::reduction_shares(acc, ${}, {}, {}, {});\n", a.name, count_expr(sc.domain), c, total);
       total += c;
     }
   }
@@ -83,14 +80,14 @@ Snippet reduction_snippet(const Graph& g, int op, const PartSpec& p) {
     if (a.kind != PartArg::Kind::Adjoint) continue;
     b.a(a.name, true);
     const int c = g.tensor(o.input(a.name)).components;
-    adds += fmt::format("  for (int k = 0; k < {}; ++k) $d_{}[k] += Real(acc[{} + k]);\n", c, a.name, offset);
+    adds += fmt::format("gen::reduction_add(acc, $d_{}, {}, {});\n", a.name, c, offset);
     offset += c;
   }
   if (offset != total)
     throw std::logic_error(fmt::format("codegen: reduction {} of op {} sums {} values into {}", p.label, o.name(), total,
                                        offset));
   return b.code(fmt::format("double acc[{}] = {{}};\n", total) + sums + fmt::format("gen::block_sum<{}>(acc);\n", total) +
-                "if (i == 0) {\n" + adds + "}\n");
+                adds);
 }
 
 std::vector<Snippet> part_snippets(const Graph& g, int op, const std::vector<PartSpec>& parts) {
