@@ -110,8 +110,9 @@ std::vector<Snippet> forward_snippets(const Graph& g, int op) {
 
 std::vector<Snippet> adjoint_snippets(const Graph& g, int op) {
   const OpNode& o = g.ops().at(op);
-  if (is_solver(o)) return solver_snippets(g, op, true);
-  return part_snippets(g, op, o.spec->adjoint);
+  std::vector<Snippet> s = is_solver(o) ? solver_snippets(g, op, true) : std::vector<Snippet>{};
+  for (Snippet& p : part_snippets(g, op, o.spec->adjoint)) s.push_back(p);  // after a solver's adjoint solve
+  return s;
 }
 
 }  // namespace ssc

@@ -43,13 +43,6 @@ __device__ __forceinline__ void add_damping_diagonal(Vec3<R>& d, const R* dampin
 }
 template <class R>
 __device__ __forceinline__ void add_damping_diagonal(Vec3<R>&, NoDamping, int) {}
-// C's cotangent for y = C p and the cotangent y_bar.
-template <class R>
-__device__ __forceinline__ void adj_damping(R* damping_bar, int n, Vec3<R> p, Vec3<R> y_bar) {
-  ops::adj_sym3_apply(damping_bar, n, p, y_bar);
-}
-template <class R>
-__device__ __forceinline__ void adj_damping(NoDamping, int, Vec3<R>, Vec3<R>) {}
 
 // (A + C) e at node n given (K e) there: the time-step system's node part.
 template <class R, class Damping>
@@ -115,83 +108,6 @@ __device__ __forceinline__ void newmark_apply_node(int i, const ops::NewmarkCoef
                                                    const R* p, R* q) {
   const Vec3<R> kp = ops::gather_corner_sum(corner, node_cell_offset, node_cell_entry, i);
   store3(q, i, fixed[i] != R(0) ? load3(p, i) : newmark_node_apply(c, mass, damping, i, load3(p, i), kp));
-}
-
-// ---- The Newmark adjoint's parameter terms, after the adjoint solve w = A^-1 u_bar ----
-
-// Node i: rhs_bar += w.
-template <class R>
-__device__ __forceinline__ void newmark_solve_rhs(int i, const R* w, R* rhs_bar) {
-  for (int k = 0; k < 3; ++k) rhs_bar[3 * i + k] += w[3 * i + k];
-}
-
-// Cell i: the rotation's and the Lame parameters' share of -w^T A u (Lame shares into
-// red[2 i], red[2 i + 1]), and the corners of K u into ku.
-template <class R>
-__device__ __forceinline__ void newmark_solve_cell(int i, const ops::NewmarkCoefficients<R>& c, R h,
-                                                   const R* rotation, const R* cell_weights, const int* cell_nodes,
-                                                   const R* lambda, const R* mu, const R* u, const R* w,
-                                                   R* rotation_bar, R* ku, R* red) {
-  Vec3<R> pc[8], yb[8], pb[8], y[8];
-  ops::load_cell_corners(u, cell_nodes, i, pc);
-  for (int k = 0; k < 8; ++k) {
-    yb[k] = (-c.a_k) * load3(w, cell_nodes[8 * i + k]);
-    pb[k] = zero3<R>();
-  }
-  const Mat3<R> Rm = ops::load_mat3(rotation, i);
-  Mat3<R> R_bar = zero33<R>();
-  R l = R(0), mm = R(0);
-  ops::adj_corotated_apply(Rm, cell_weights + 8 * i, lambda[0], mu[0], h, pc, yb, R_bar, l, mm, pb);
-  ops::add_mat3(rotation_bar, i, R_bar);
-  ops::corotated_apply(Rm, cell_weights + 8 * i, lambda[0], mu[0], h, pc, y);
-  for (int k = 0; k < 8; ++k) store3(ku, 8 * i + k, y[k]);
-  red[2 * i] = l;
-  red[2 * i + 1] = mm;
-}
-
-// Node i: the mass's and C's share of -w^T A u, the coefficients' shares into red2[2 i],
-// red2[2 i + 1] (0 on fixed nodes). damping_bar: C's cotangent (or nullptr).
-template <class R, class DampingBar>
-__device__ __forceinline__ void newmark_solve_node(int i, const ops::NewmarkCoefficients<R>& c, const R* mass,
-                                                   const R* fixed, const R* u, const R* w, const R* ku,
-                                                   const int* node_cell_offset, const int* node_cell_entry,
-                                                   R* mass_bar, DampingBar damping_bar, double* red2) {
-  if (fixed[i] != R(0)) {
-    red2[2 * i] = 0;
-    red2[2 * i + 1] = 0;
-    return;
-  }
-  const Vec3<R> kui = ops::gather_corner_sum(ku, node_cell_offset, node_cell_entry, i);
-  Vec3<R> ub = zero3<R>(), kb = zero3<R>();
-  ops::NewmarkCoefficientBars<R> cb;
-  ops::adj_newmark_system_apply(c, mass[i], load3(u, i), kui, R(-1) * load3(w, i), mass_bar[i], ub, kb, cb);
-  adj_damping(damping_bar, i, load3(u, i), R(-1) * load3(w, i));
-  red2[2 * i] = double(cb.a_m);
-  red2[2 * i + 1] = double(cb.a_k);
-}
-
-// Block per item: the cells' and nodes' shares summed in a fixed order into the
-// cotangents of lambda, mu and the damping coefficients.
-template <class R>
-__device__ __forceinline__ void newmark_solve_reduce(int i, int n_cell, int n_node, const R* red, const double* red2,
-                                                     R* lambda_bar, R* mu_bar, R* mass_damping_bar,
-                                                     R* stiffness_damping_bar) {
-  double v[4] = {0, 0, 0, 0};
-  for (int e = i; e < n_cell; e += SSC_ITEM) {
-    v[0] += double(red[2 * e]);
-    v[1] += double(red[2 * e + 1]);
-  }
-  for (int k = i; k < n_node; k += SSC_ITEM) {
-    v[2] += red2[2 * k];
-    v[3] += red2[2 * k + 1];
-  }
-  block_sum<4>(v);
-  if (i == 0) {
-    lambda_bar[0] += R(v[0]);
-    mu_bar[0] += R(v[1]);
-    mass_damping_bar[0] += R(v[2]);
-    stiffness_damping_bar[0] += R(v[3]);
-  }
 }
 
 // ---- Band Laplacian stages (one thread per band node or node i) ----

@@ -126,41 +126,6 @@ Snippet extension_grid_two_phase(const Graph& g, int op) {
                 "gen::extension_pcg_grid_two_phase<Real>(pcg, n_band, g_band_neighbors, g_band_degree);\n");
 }
 
-// After the adjoint solve (w = A^-1 u_bar): rhs_bar += w, and the parameters' share of
-// -w^T A u (rotation, Lame, mass, damping coefficients, C) by cells, nodes and a reduction.
-void newmark_adjoint_parameters(const Graph& g, int op, std::vector<Snippet>& s) {
-  const std::string n = "op" + std::to_string(op);
-  s.push_back(Builder(g, op, "newmark_solve_rhs", Extent::Node)
-                  .a("rhs").scratch("w", "w_" + n, "Real", Domain::Node, 3, false).barrier()
-                  .code("gen::newmark_solve_rhs<Real>(i, $w, $d_rhs);\n"));
-  Builder cell(g, op, "newmark_solve_cells", Extent::Cell);
-  newmark_scalars(cell).t("rotation").t("lambda").t("mu").t("u", false, true).a("rotation");
-  cell.grid("cell_weights", "Real").grid("cell_nodes", "int").scratch("w", "w_" + n, "Real", Domain::Node, 3, false, true);
-  cell.scratch("ku", "ku_" + n, "Real", Domain::Cell, 24, true).scratch("red", "red_" + n, "Real", Domain::Cell, 2, true);
-  s.push_back(cell.code(std::string(kCoefficients) +
-                        "gen::newmark_solve_cell<Real>(i, c, h, $rotation, g_cell_weights, g_cell_nodes, $lambda, $mu, "
-                        "$u, $w, $d_rotation,\n"
-                        "                              $ku, $red);\n"));
-  Builder node(g, op, "newmark_solve_nodes", Extent::Node);
-  const bool damped = bind_damping(g, op, node) != "nullptr";
-  if (damped) node.a("damping");
-  newmark_scalars(node).t("mass").t("fixed").t("u").a("mass").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
-  node.scratch("w", "w_" + n, "Real", Domain::Node, 3, false).scratch("ku", "ku_" + n, "Real", Domain::Cell, 24, false, true);
-  node.scratch("red2", "red2_" + n, "double", Domain::Node, 2, true);
-  s.push_back(node.code(std::string(kCoefficients) +
-                        "gen::newmark_solve_node<Real>(i, c, $mass, $fixed, $u, $w, $ku, g_node_cell_offset, "
-                        "g_node_cell_entry, $d_mass,\n"
-                        "                              " + std::string(damped ? "$d_damping" : "nullptr") +
-                        ", $red2);\n"));
-  s.push_back(Builder(g, op, "newmark_solve_reduce", Extent::Item)
-                  .a("lambda").a("mu").a("mass_damping").a("stiffness_damping")
-                  .scratch("red", "red_" + n, "Real", Domain::Cell, 2, false)
-                  .scratch("red2", "red2_" + n, "double", Domain::Node, 2, false).barrier()
-                  .code("gen::newmark_solve_reduce<Real>(i, n_cell, n_node, $red, $red2, $d_lambda, $d_mu, "
-                        "$d_mass_damping,\n"
-                        "                                $d_stiffness_damping);\n"));
-}
-
 std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   const std::string x3 = "3 * n_node";
   std::vector<Snippet> s;
@@ -209,7 +174,6 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   }
   for (Snippet& p : pcg_snippets(g, op)) s.push_back(p);
   s.push_back(newmark_grid_loop(g, op));
-  if (adjoint) newmark_adjoint_parameters(g, op, s);
   return s;
 }
 

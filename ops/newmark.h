@@ -9,6 +9,7 @@
 //   (A + C) u = b + dt f(v-) + C (u- + dt v-),
 // since theta dt (v - v-) = u - u- - dt v-.
 #pragma once
+#include "ops/corotation.h"
 #include "ops/gather.h"
 #include "ops/part.h"
 #include "ops/ssc_math.h"
@@ -195,6 +196,65 @@ SSC_HD inline void adj_velocity_update_node(int i, const PartContext<Real>&, con
   store3(v_prev_bar, i, vpb);
 }
 
+// ---- the newmark_solve op's adjoint parts, run after the engine's adjoint solve
+// A w = u_bar (runtime/solvers.cpp, codegen/solver_snippets.cpp), which leaves w in the op's
+// scratch buffer: rhs_bar += w, and the parameters' share of -w^T A u ----
+
+template <class Real>
+SSC_HD inline void adj_newmark_solve_rhs(int i, const PartContext<Real>&, const Real* w, Real* rhs_bar) {
+  for (int k = 0; k < 3; ++k) rhs_bar[3 * i + k] += w[3 * i + k];
+}
+
+// Cell i: the rotation's share and the Lame shares (lame_bar_share, 2 a cell) of -w^T A u,
+// and the corners of K u (ku, for the nodes' part).
+template <class Real>
+SSC_HD inline void adj_newmark_solve_cell(int i, const PartContext<Real>& cx, const Real* dt, const Real* theta,
+                                          const Real* mass_damping, const Real* stiffness_damping, const Real* rotation,
+                                          const Real* cell_weights, const int* cell_nodes, const Real* lambda,
+                                          const Real* mu, const Real* u, const Real* w, Real* rotation_bar, Real* ku,
+                                          Real* lame_bar_share) {
+  const NewmarkCoefficients<Real> c = newmark_coefficients(dt[0], theta[0], mass_damping[0], stiffness_damping[0]);
+  Vec3<Real> pc[8], yb[8], pb[8], y[8];
+  load_cell_corners(u, cell_nodes, i, pc);
+  for (int k = 0; k < 8; ++k) {
+    yb[k] = (-c.a_k) * load3(w, cell_nodes[8 * i + k]);
+    pb[k] = zero3<Real>();
+  }
+  const Mat3<Real> R = load_mat3(rotation, i);
+  Mat3<Real> R_bar = zero33<Real>();
+  Real l = Real(0), m = Real(0);
+  adj_corotated_apply(R, cell_weights + 8 * i, lambda[0], mu[0], cx.h, pc, yb, R_bar, l, m, pb);
+  add_mat3(rotation_bar, i, R_bar);
+  corotated_apply(R, cell_weights + 8 * i, lambda[0], mu[0], cx.h, pc, y);
+  for (int k = 0; k < 8; ++k) store3(ku, 8 * i + k, y[k]);
+  lame_bar_share[2 * i] = l;
+  lame_bar_share[2 * i + 1] = m;
+}
+
+// Node i: the mass's and C's share of -w^T A u, and the coefficients' shares (a_m, a_k;
+// double, 2 a node; 0 on fixed nodes, which the system leaves out).
+template <class Real>
+SSC_HD inline void adj_newmark_solve_node(int i, const PartContext<Real>&, const Real* dt, const Real* theta,
+                                          const Real* mass_damping, const Real* stiffness_damping, const Real* mass,
+                                          const Real* fixed, const Real* u, const Real* w, const Real* ku,
+                                          const int* node_cell_offset, const int* node_cell_entry, Real* mass_bar,
+                                          Real* damping_bar, double* coefficient_bar_share) {
+  if (fixed[i] != Real(0)) {
+    coefficient_bar_share[2 * i] = 0;
+    coefficient_bar_share[2 * i + 1] = 0;
+    return;
+  }
+  const NewmarkCoefficients<Real> c = newmark_coefficients(dt[0], theta[0], mass_damping[0], stiffness_damping[0]);
+  const Vec3<Real> kui = gather_corner_sum(ku, node_cell_offset, node_cell_entry, i);
+  Vec3<Real> ub = zero3<Real>(), kb = zero3<Real>();
+  NewmarkCoefficientBars<Real> cb;
+  const Vec3<Real> y_bar = Real(-1) * load3(w, i);
+  adj_newmark_system_apply(c, mass[i], load3(u, i), kui, y_bar, mass_bar[i], ub, kb, cb);
+  if (damping_bar) adj_sym3_apply(damping_bar, i, load3(u, i), y_bar);
+  coefficient_bar_share[2 * i] = double(cb.a_m);
+  coefficient_bar_share[2 * i + 1] = double(cb.a_k);
+}
+
 #ifdef SSC_OP_SPECS
 inline OpSpec newmark_rhs_spec() {
   OpSpec s;
@@ -219,7 +279,8 @@ inline OpSpec newmark_rhs_spec() {
 
 // (a_m M + a_k R K R^T + C) u = rhs on the free nodes: the engine's Jacobi-PCG schedule
 // "newmark_pcg" (runtime/solvers.cpp, codegen/solver_snippets.cpp); its adjoint solves the
-// same system for the cotangent and hands the parameters -mu_adj^T dA/dp u.
+// same system for the cotangent, w = A^-1 u_bar into the scratch buffer w, and the adjoint
+// parts hand the parameters -w^T dA/dp u.
 inline OpSpec newmark_solve_spec() {
   OpSpec s;
   s.name = "newmark_solve";
@@ -230,6 +291,16 @@ inline OpSpec newmark_solve_spec() {
              constant_in("fixed", Access::Opaque), optional_in("damping", Access::Opaque), constant_in("dt"),
              constant_in("theta"), in("mass_damping"), in("stiffness_damping"), out("u"), out("cg_iterations")};
   s.slots.back().differentiable = false;
+  s.scratch = {{"w", Domain::Node, 3}, {"ku", Domain::Cell, 24}, {"red", Domain::Cell, 2}, {"red2", Domain::Node, 2}};
+  s.adjoint = {part("newmark_solve_rhs", Extent::Node, SSC_ADJOINT_PART(adj_newmark_solve_rhs), {"$w", "d_rhs"}),
+               part("newmark_solve_cells", Extent::Cell, SSC_ADJOINT_PART(adj_newmark_solve_cell),
+                    {"dt", "theta", "mass_damping", "stiffness_damping", "rotation", "#cell_weights", "#cell_nodes",
+                     "lambda", "mu", "u^", "$w^", "d_rotation", "$ku", "$red"}),
+               part("newmark_solve_nodes", Extent::Node, SSC_ADJOINT_PART(adj_newmark_solve_node),
+                    {"dt", "theta", "mass_damping", "stiffness_damping", "mass", "fixed", "u", "$w", "$ku^",
+                     "#node_cell_offset", "#node_cell_entry", "d_mass", "d_damping", "$red2"}),
+               reduction("newmark_solve_reduce", {"$red", "$red2"},
+                         {"d_lambda", "d_mu", "d_mass_damping", "d_stiffness_damping"})};
   return s;
 }
 

@@ -188,12 +188,13 @@ void Interpreter<Real>::run_op_adjoint(int op) {
 template <class Real>
 void Interpreter<Real>::execute_adjoint(const OpNode& op) {
   const int o = int(&op - graph_.ops().data());
-  if (!op.spec->solver.empty()) {
-    const SolverSchedule<Real>& s = solver_schedule<Real>(op.spec->solver);
-    for_each_batch_item(batch(), [&](int b) { s.adjoint(*this, op, b); });
-    return;
-  }
-  for_each_batch_item(batch(), [&](int b) { run_parts(o, op.spec->adjoint, b); });
+  // A solver's adjoint solve first (it leaves its solution in the op's scratch), then the
+  // op's adjoint parts.
+  const SolverSchedule<Real>* s = op.spec->solver.empty() ? nullptr : &solver_schedule<Real>(op.spec->solver);
+  for_each_batch_item(batch(), [&](int b) {
+    if (s) s->adjoint(*this, op, b);
+    run_parts(o, op.spec->adjoint, b);
+  });
 }
 
 template class Interpreter<double>;

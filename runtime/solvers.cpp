@@ -127,76 +127,21 @@ void newmark_forward(Interpreter<Real>& in, const OpNode& op, int b) {
         b, r.relative_residual, r.iterations, o.cg_tolerance));
 }
 
-// Sums per-cell partial values in cell order (deterministic).
-template <class Real>
-Real ordered_sum(const std::vector<Real>& v) {
-  double s = 0;
-  for (Real x : v) s += double(x);
-  return Real(s);
-}
-
+// w = A^-1 u_bar (A symmetric) into the op's scratch buffer w; the op's adjoint parts
+// (ops/newmark.h) then add w to rhs_bar and hand the parameters -w^T (dA/dp) u.
 template <class Real>
 void newmark_adjoint(Interpreter<Real>& in, const OpNode& op, int b) {
   const Slots<Real> a{in, op, b};
-  const StaticArrays& g = in.grid();
   const NewmarkSystem<Real> system = newmark_system(in, a);
-  const auto& c = system.c;
-  const Real h = Real(g.h);
-  const Real* weights = in.static_real("cell_weights");
-  const Real *rot = a.value("rotation"), *m = a.value("mass"), *u = a.value("u"), *fixed = a.value("fixed");
-  const Real lambda = system.lambda, mu = system.mu;
-  const long n = 3L * g.node_count;
-  // mu_adj = A^-1 u_bar (A symmetric), then rhs_bar += mu_adj and the parameters receive
-  // -d(mu_adj^T A u)/d(parameter).
-  std::vector<Real> w(n, Real(0));
-  const SolverOptions& o = in.options();
-  const PcgResult r = system.solve(a.bar("u"), w.data(), o.cg_tolerance, o.cg_max_iterations);
+  const int o = int(&op - in.graph().ops().data());
+  Real* w = in.scratch_real(o, "w", b);
+  std::fill_n(w, 3 * size_t(in.grid().node_count), Real(0));
+  const SolverOptions& opt = in.options();
+  const PcgResult r = system.solve(a.bar("u"), w, opt.cg_tolerance, opt.cg_max_iterations);
   if (!r.converged)
     throw SimulationError(fmt::format("the adjoint time-step solve did not converge (batch item {}): relative "
                                       "residual {:.3g} after {} iterations",
                                       b, r.relative_residual, r.iterations));
-  Real* rhs_bar = a.bar("rhs");
-  for (long i = 0; i < n; ++i) rhs_bar[i] += w[i];
-  const size_t corner_size = 24 * size_t(g.cell_count);
-  std::vector<Real> lb(g.cell_count), mb(g.cell_count), ku(corner_size);
-  Real* rot_bar = a.bar("rotation");
-#pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
-  for (int e = 0; e < g.cell_count; ++e) {
-    Vec3<Real> pc[8], yb[8], pb[8], y[8];
-    ops::load_cell_corners(u, g.cell_nodes.data(), e, pc);
-    for (int k = 0; k < 8; ++k) {
-      yb[k] = (-c.a_k) * load3(w.data(), g.cell_nodes[8 * e + k]);
-      pb[k] = zero3<Real>();
-    }
-    const Mat3<Real> R = ops::load_mat3(rot, e);
-    Mat3<Real> R_bar = zero33<Real>();
-    Real l = Real(0), mm = Real(0);
-    ops::adj_corotated_apply(R, weights + 8 * e, lambda, mu, h, pc, yb, R_bar, l, mm, pb);
-    ops::add_mat3(rot_bar, e, R_bar);
-    ops::corotated_apply(R, weights + 8 * e, lambda, mu, h, pc, y);
-    for (int k = 0; k < 8; ++k) store3(ku.data(), 8 * e + k, y[k]);
-    lb[e] = l;
-    mb[e] = mm;
-  }
-  a.bar("lambda")[0] += ordered_sum(lb);
-  a.bar("mu")[0] += ordered_sum(mb);
-  Real* m_bar = a.bar("mass");
-  Real* damping_bar = system.damping ? a.bar("damping") : nullptr;
-  double alpha_bar = 0, beta_bar = 0;
-  for (int i = 0; i < g.node_count; ++i) {
-    if (fixed[i] != Real(0)) continue;
-    // The parameters' share of -mu_adj^T A u: the system's adjoint at y_bar = -mu_adj.
-    const Vec3<Real> kui = ops::gather_corner_sum(ku.data(), g.node_cell_offset.data(), g.node_cell_entry.data(), i);
-    Vec3<Real> ub = zero3<Real>(), kb = zero3<Real>();
-    ops::NewmarkCoefficientBars<Real> cb;
-    const Vec3<Real> y_bar = Real(-1) * load3(w.data(), i);
-    ops::adj_newmark_system_apply(c, m[i], load3(u, i), kui, y_bar, m_bar[i], ub, kb, cb);
-    if (damping_bar) ops::adj_sym3_apply(damping_bar, i, load3(u, i), y_bar);
-    alpha_bar += double(cb.a_m);
-    beta_bar += double(cb.a_k);
-  }
-  a.bar("mass_damping")[0] += Real(alpha_bar);
-  a.bar("stiffness_damping")[0] += Real(beta_bar);
 }
 
 // Solves the band Laplacian L x = rhs (3 components; x starts from its content).
