@@ -62,14 +62,16 @@ class Interpreter {
   void run_adjoint();
   void run_op_adjoint(int op);
 
- // ---- for the solver schedules (runtime/solvers.cpp) ----
+  // ---- for the solver schedules (runtime/solvers.cpp) ----
   const Real* static_real(const std::string& name) const { return static_real_.at(name).data(); }
-  const std::vector<Real>& static_real_vector(const std::string& name) const { return static_real_.at(name); }
   RunReport& mutable_report() { return report_; }
   std::vector<Real>& extension_adjoint_guess(int b) { return extension_adjoint_guess_[b]; }
   // A Real scratch buffer of op `op` for batch item b (a solver leaves its result there for
   // the op's adjoint parts).
-  Real* scratch_real(int op, const std::string& key, int b) { return scratch_[op].at(key).real.data() + scratch_[op].at(key).stride * b; }
+  Real* scratch_real(int op, const std::string& key, int b) {
+    Scratch& s = scratch_[op].at(key);
+    return s.real.data() + s.stride * b;
+  }
 
  private:
   struct Scratch {
