@@ -156,8 +156,7 @@ struct CheckRow {
 };
 
 std::string part_labels(const OpSpec& s, bool adjoint) {
-  if (!s.solver.empty()) return "solver " + s.solver;
-  std::string out;
+  std::string out = s.solver.empty() ? "" : "solver " + s.solver;
   std::set<std::string> seen;
   for (const PartSpec& p : adjoint ? s.adjoint : s.forward)
     if (seen.insert(p.label + (p.function.name.empty() ? "(sum)" : "")).second)
