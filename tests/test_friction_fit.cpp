@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "tests/ssc_binary.h"
+
 namespace ssc {
 namespace {
 
@@ -69,14 +71,6 @@ json box_scene(double cell, double dt, int steps, std::optional<double> friction
 json data_scene() { return box_scene(0.0125, 0.0025, 120, kTrueMu, true); }
 // The fit scene: cell 25 mm, dt 5 ms (the frames fall on every 4th step).
 json fit_scene(std::optional<double> friction) { return box_scene(0.025, 0.005, 60, friction, false); }
-
-std::string ssc_binary_path() {
-  char buf[4096];
-  const ssize_t n = readlink("/proc/self/exe", buf, sizeof buf - 1);
-  if (n <= 0) return "";
-  buf[n] = 0;
-  return (fs::path(buf).parent_path() / "ssc").string();
-}
 
 class FrictionFit : public ::testing::Test {
  protected:

@@ -33,6 +33,7 @@
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
 #include "runtime/cuda_runtime.h"
+#include "tests/ssc_binary.h"
 
 namespace ssc {
 namespace {
@@ -903,21 +904,13 @@ TEST_F(SceneFiles, BadOverrideSyntaxIsRejected) {
 // ==========================================================================================
 // Command line
 
-std::string ssc_binary() {
-  char buf[4096];
-  const ssize_t n = readlink("/proc/self/exe", buf, sizeof buf - 1);
-  if (n <= 0) return "";
-  buf[n] = 0;
-  return (fs::path(buf).parent_path() / "ssc").string();
-}
-
 class CliSimulate : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() / ("ssc-cli-test-" + std::to_string(getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
-    binary_ = ssc_binary();
+    binary_ = ssc_binary_path();
     ASSERT_TRUE(fs::exists(binary_)) << "the ssc binary is not next to the test binary: " << binary_;
     scene_ = (dir_ / "tiny.json").string();
     std::ofstream(scene_) << R"({
