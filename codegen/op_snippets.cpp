@@ -19,10 +19,6 @@ using namespace snippet;
 
 std::string scratch_name(const std::string& key, int op) { return key + "_op" + std::to_string(op); }
 
-int scratch_components(const Graph& g, const OpNode& o, const ScratchSpec& s) {
-  return s.components > 0 ? s.components : g.tensor(o.input(s.like_slot)).components;
-}
-
 Snippet function_snippet(const Graph& g, int op, const PartSpec& p) {
   const OpNode& o = g.ops().at(op);
   Builder b(g, op, p.label, p.extent);

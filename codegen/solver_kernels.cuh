@@ -67,7 +67,7 @@ __device__ __forceinline__ void newmark_diagonal_corner(int i, R h, const R* rot
                                                         const R* lambda, const R* mu, R* corner) {
   const int cell = i >> 3;
   store3(corner, i,
-         ops::corotated_diagonal_corner(ops::load_mat3(rotation, cell), cell_weights + 8 * cell, lambda[0], mu[0], h,
+         ops::corotated_diagonal_corner(ops::load_mat3(rotation, cell), cell_weights + 8 * cell, lambda[cell], mu[cell], h,
                                         i & 7));
 }
 
@@ -96,7 +96,7 @@ __device__ __forceinline__ void newmark_apply_cell(int i, R h, const R* rotation
                                                    R* corner) {
   Vec3<R> pc[8], y[8];
   ops::load_cell_corners(p, cell_nodes, i, pc);
-  ops::corotated_apply(ops::load_mat3(rotation, i), cell_weights + 8 * i, lambda[0], mu[0], h, pc, y);
+  ops::corotated_apply(ops::load_mat3(rotation, i), cell_weights + 8 * i, lambda[i], mu[i], h, pc, y);
   for (int k = 0; k < 8; ++k) store3(corner, 8 * i + k, y[k]);
 }
 
@@ -470,7 +470,7 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
       const Vec3<R> q = mul_transposed(Rm, value(source, nd));
       const Vec3<R> qn[3] = {shfl_xor3(q, 1), shfl_xor3(q, 2), shfl_xor3(q, 4)};
       Vec3<R> col[3];
-      ops::element_corner_columns(k, cell_weights[t], lambda[0], mu[0], h, q, qn, col);
+      ops::element_corner_columns(k, cell_weights[t], lambda[e], mu[e], h, q, qn, col);
       const Vec3<R> y =
           Rm * ops::element_corner_assemble(col, shfl_xor3(col[0], 1), shfl_xor3(col[1], 2), shfl_xor3(col[2], 4));
       if (valid) store3(corner, t, y);

@@ -22,6 +22,11 @@ bool OpNode::bound(const std::string& slot) const {
   return false;
 }
 
+int scratch_components(const Graph& g, const OpNode& op, const ScratchSpec& s) {
+  if (s.components > 0) return s.components;
+  return op.bound(s.like_slot) ? g.tensor(op.input(s.like_slot)).components : 1;
+}
+
 int Graph::add_tensor(const std::string& name, Domain domain, int components, TensorInfo::Role role,
                       DType dtype) {
   if (find_tensor(name) >= 0) throw std::logic_error("duplicate tensor name " + name);

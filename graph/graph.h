@@ -50,6 +50,11 @@ struct OpNode {
   const std::string& name() const { return spec->name; }
 };
 
+class Graph;
+// Components per index of an op's scratch buffer: its own count, or its like_slot's (1, an
+// unused placeholder, when that optional slot is unbound).
+int scratch_components(const Graph& g, const OpNode& op, const ScratchSpec& s);
+
 class Graph {
  public:
   int add_tensor(const std::string& name, Domain domain, int components, TensorInfo::Role role,

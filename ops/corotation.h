@@ -63,25 +63,21 @@ template <class Real>
 SSC_HD inline void corotation_force_cell(int i, const PartContext<Real>& cx, const Real* rotation, const Real* weights,
                                          const Real* lambda, const Real* mu, Real* corner_force) {
   Vec3<Real> fc[8];
-  corotation_offset_force(load_mat3(rotation, i), weights + 8 * i, lambda[0], mu[0], cx.h, fc);
+  corotation_offset_force(load_mat3(rotation, i), weights + 8 * i, lambda[i], mu[i], cx.h, fc);
   for (int c = 0; c < 8; ++c) store3(corner_force, 8 * i + c, fc[c]);
 }
 
-// Accumulates the rotation's cotangent; the cell's shares of the Lame cotangents go to
-// lame_bar_share (2 per cell; a reduction part sums them over the cells in a fixed order).
+// Accumulates the rotation's and the cell's Lame cotangents.
 template <class Real>
 SSC_HD inline void adj_corotation_force_cell(int i, const PartContext<Real>& cx, const Real* rotation, const Real* weights,
                                              const Real* lambda, const Real* mu, const Real* corner_force_bar,
-                                             Real* rotation_bar, Real* lame_bar_share) {
+                                             Real* rotation_bar, Real* lambda_bar, Real* mu_bar) {
   Vec3<Real> fb[8];
   for (int c = 0; c < 8; ++c) fb[c] = load3(corner_force_bar, 8 * i + c);
   Mat3<Real> R_bar = zero33<Real>();
-  Real lambda_bar = Real(0), mu_bar = Real(0);
-  adj_corotation_offset_force(load_mat3(rotation, i), weights + 8 * i, lambda[0], mu[0], cx.h, fb, R_bar, lambda_bar,
-                              mu_bar);
+  adj_corotation_offset_force(load_mat3(rotation, i), weights + 8 * i, lambda[i], mu[i], cx.h, fb, R_bar, lambda_bar[i],
+                              mu_bar[i]);
   add_mat3(rotation_bar, i, R_bar);
-  lame_bar_share[2 * i] = lambda_bar;
-  lame_bar_share[2 * i + 1] = mu_bar;
 }
 
 // Per-corner K p of cell i (the matrix-free stiffness product).
@@ -91,18 +87,17 @@ SSC_HD inline void stiffness_apply_cell(int i, const PartContext<Real>& cx, cons
                                         Real* corner_out) {
   Vec3<Real> pc[8], y[8];
   load_cell_corners(p, cell_nodes, i, pc);
-  corotated_apply(load_mat3(rotation, i), weights + 8 * i, lambda[0], mu[0], cx.h, pc, y);
+  corotated_apply(load_mat3(rotation, i), weights + 8 * i, lambda[i], mu[i], cx.h, pc, y);
   for (int c = 0; c < 8; ++c) store3(corner_out, 8 * i + c, y[c]);
 }
 
-// Accumulates the rotation's cotangent, stores p's corner cotangents (corner_bar, 8 per cell)
-// and the cell's Lame shares (lame_bar_share, 2 per cell).
+// Accumulates the rotation's and the cell's Lame cotangents and stores p's corner cotangents
+// (corner_bar, 8 per cell).
 template <class Real>
 SSC_HD inline void adj_stiffness_apply_cell(int i, const PartContext<Real>& cx, const Real* rotation, const Real* weights,
                                             const Real* lambda, const Real* mu, const Real* p, const int* cell_nodes,
                                             const Real* corner_out_bar, Real* rotation_bar, Real* corner_bar,
-                                            Real* lame_bar_share) {
-  Real lambda_bar = Real(0), mu_bar = Real(0);
+                                            Real* lambda_bar, Real* mu_bar) {
   Vec3<Real> pc[8], yb[8], pb[8];
   load_cell_corners(p, cell_nodes, i, pc);
   for (int c = 0; c < 8; ++c) {
@@ -110,12 +105,10 @@ SSC_HD inline void adj_stiffness_apply_cell(int i, const PartContext<Real>& cx, 
     pb[c] = zero3<Real>();
   }
   Mat3<Real> R_bar = zero33<Real>();
-  adj_corotated_apply(load_mat3(rotation, i), weights + 8 * i, lambda[0], mu[0], cx.h, pc, yb, R_bar, lambda_bar, mu_bar,
-                      pb);
+  adj_corotated_apply(load_mat3(rotation, i), weights + 8 * i, lambda[i], mu[i], cx.h, pc, yb, R_bar, lambda_bar[i],
+                      mu_bar[i], pb);
   add_mat3(rotation_bar, i, R_bar);
   for (int c = 0; c < 8; ++c) store3(corner_bar, 8 * i + c, pb[c]);
-  lame_bar_share[2 * i] = lambda_bar;
-  lame_bar_share[2 * i + 1] = mu_bar;
 }
 
 #ifdef SSC_OP_SPECS
@@ -142,12 +135,10 @@ inline OpSpec corotation_force_spec() {
   s.name = "corotation_force";
   s.domain = Domain::Cell;
   s.slots = {in("rotation"), in("lambda"), in("mu"), out("corner_force")};
-  s.scratch = {{"red", Domain::Cell, 2}};
   s.forward = {part("corotation_force", Extent::Cell, SSC_PART(corotation_force_cell),
                     {"rotation", "#cell_weights", "lambda", "mu", "corner_force"})};
   s.adjoint = {part("corotation_force", Extent::Cell, SSC_ADJOINT_PART(adj_corotation_force_cell),
-                    {"rotation", "#cell_weights", "lambda", "mu", "d_corner_force", "d_rotation", "$red"}),
-               reduction("corotation_force_reduce", {"$red"}, {"d_lambda", "d_mu"})};
+                    {"rotation", "#cell_weights", "lambda", "mu", "d_corner_force", "d_rotation", "d_lambda", "d_mu"})};
   return s;
 }
 
@@ -157,15 +148,14 @@ inline OpSpec stiffness_apply_spec() {
   s.name = "stiffness_apply";
   s.domain = Domain::Cell;
   s.slots = {in("rotation"), in("lambda"), in("mu"), in("u_prev", Access::Gather), out("ku_corner")};
-  s.scratch = {{"corner", Domain::Cell, 24}, {"red", Domain::Cell, 2}};
+  s.scratch = {{"corner", Domain::Cell, 24}};
   s.forward = {part("stiffness_apply", Extent::Cell, SSC_PART(stiffness_apply_cell),
                     {"rotation", "#cell_weights", "lambda", "mu", "u_prev^", "#cell_nodes", "ku_corner"})};
   s.adjoint = {part("stiffness_apply", Extent::Cell, SSC_ADJOINT_PART(adj_stiffness_apply_cell),
                     {"rotation", "#cell_weights", "lambda", "mu", "u_prev^", "#cell_nodes", "d_ku_corner", "d_rotation",
-                     "$corner", "$red"}),
+                     "$corner", "d_lambda", "d_mu"}),
                part("stiffness_apply_gather", Extent::Node, SSC_ADJOINT_PART(add_corner_sum),
-                    {"$corner^", "#node_cell_offset", "#node_cell_entry", "d_u_prev"}),
-               reduction("stiffness_apply_reduce", {"$red"}, {"d_lambda", "d_mu"})};
+                    {"$corner^", "#node_cell_offset", "#node_cell_entry", "d_u_prev"})};
   return s;
 }
 #endif

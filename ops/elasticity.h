@@ -235,30 +235,41 @@ SSC_HD inline void adj_lame_from_young(Real E, Real nu, Real lambda_bar, Real mu
   nu_bar += -mu_bar * E / (Real(2) * a * a) + lambda_bar * E * (Real(1) + Real(2) * nu * nu) / (a * a * b * b);
 }
 
-// ---- the lame op: (E, nu) -> (lambda, mu), once per batch item ----
+// ---- the lame op: (E, nu) -> (lambda, mu) per cell; E is the cell's entry of cell_youngs
+// (ops/stiffness_field.h) where the body is heterogeneous, else youngs_modulus ----
 
 template <class Real>
-SSC_HD inline void lame(int, const PartContext<Real>&, const Real* youngs_modulus, const Real* poisson_ratio, Real* lambda,
-                        Real* mu) {
-  lame_from_young(youngs_modulus[0], poisson_ratio[0], lambda[0], mu[0]);
+SSC_HD inline void lame_cell(int i, const PartContext<Real>&, const Real* youngs_modulus, const Real* cell_youngs,
+                             const Real* poisson_ratio, Real* lambda, Real* mu) {
+  lame_from_young(cell_youngs ? cell_youngs[i] : youngs_modulus[0], poisson_ratio[0], lambda[i], mu[i]);
 }
 
+// The cell's E cotangent goes to cell_youngs where bound, else to its share of youngs_modulus's;
+// the shares (2 a cell: E, nu; double) are summed by a reduction part.
 template <class Real>
-SSC_HD inline void adj_lame(int, const PartContext<Real>&, const Real* youngs_modulus, const Real* poisson_ratio,
-                            const Real* lambda_bar, const Real* mu_bar, Real* youngs_modulus_bar, Real* poisson_ratio_bar) {
-  adj_lame_from_young(youngs_modulus[0], poisson_ratio[0], lambda_bar[0], mu_bar[0], youngs_modulus_bar[0],
-                      poisson_ratio_bar[0]);
+SSC_HD inline void adj_lame_cell(int i, const PartContext<Real>&, const Real* youngs_modulus, const Real* cell_youngs,
+                                 const Real* poisson_ratio, const Real* lambda_bar, const Real* mu_bar,
+                                 Real* cell_youngs_bar, double* lame_bar_share) {
+  Real E_bar = Real(0), nu_bar = Real(0);
+  adj_lame_from_young(cell_youngs ? cell_youngs[i] : youngs_modulus[0], poisson_ratio[0], lambda_bar[i], mu_bar[i], E_bar,
+                      nu_bar);
+  if (cell_youngs_bar) cell_youngs_bar[i] += E_bar;
+  lame_bar_share[2 * i] = cell_youngs_bar ? 0.0 : double(E_bar);
+  lame_bar_share[2 * i + 1] = double(nu_bar);
 }
 
 #ifdef SSC_OP_SPECS
 inline OpSpec lame_spec() {
   OpSpec s;
   s.name = "lame";
-  s.domain = Domain::Scalar;
-  s.slots = {in("youngs_modulus"), in("poisson_ratio"), out("lambda"), out("mu")};
-  s.forward = {part("lame", Extent::One, SSC_PART(lame), {"youngs_modulus", "poisson_ratio", "lambda", "mu"})};
-  s.adjoint = {part("lame", Extent::One, SSC_ADJOINT_PART(adj_lame),
-                    {"youngs_modulus", "poisson_ratio", "d_lambda", "d_mu", "d_youngs_modulus", "d_poisson_ratio"})};
+  s.domain = Domain::Cell;
+  s.slots = {in("youngs_modulus"), optional_in("cell_youngs"), in("poisson_ratio"), out("lambda"), out("mu")};
+  s.scratch = {{"red", Domain::Cell, 2}};
+  s.forward = {part("lame", Extent::Cell, SSC_PART(lame_cell),
+                    {"youngs_modulus", "cell_youngs", "poisson_ratio", "lambda", "mu"})};
+  s.adjoint = {part("lame", Extent::Cell, SSC_ADJOINT_PART(adj_lame_cell),
+                    {"youngs_modulus", "cell_youngs", "poisson_ratio", "d_lambda", "d_mu", "d_cell_youngs", "$red"}),
+               reduction("lame_reduce", {"$red"}, {"d_youngs_modulus", "d_poisson_ratio"})};
   return s;
 }
 #endif

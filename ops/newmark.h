@@ -205,14 +205,14 @@ SSC_HD inline void adj_newmark_solve_rhs(int i, const PartContext<Real>&, const 
   for (int k = 0; k < 3; ++k) rhs_bar[3 * i + k] += w[3 * i + k];
 }
 
-// Cell i: the rotation's share and the Lame shares (lame_bar_share, 2 a cell) of -w^T A u,
-// and the corners of K u (ku, for the nodes' part).
+// Cell i: the rotation's and the cell's Lame shares of -w^T A u, and the corners of K u (ku,
+// for the nodes' part).
 template <class Real>
 SSC_HD inline void adj_newmark_solve_cell(int i, const PartContext<Real>& cx, const Real* dt, const Real* theta,
                                           const Real* mass_damping, const Real* stiffness_damping, const Real* rotation,
                                           const Real* cell_weights, const int* cell_nodes, const Real* lambda,
                                           const Real* mu, const Real* u, const Real* w, Real* rotation_bar, Real* ku,
-                                          Real* lame_bar_share) {
+                                          Real* lambda_bar, Real* mu_bar) {
   const NewmarkCoefficients<Real> c = newmark_coefficients(dt[0], theta[0], mass_damping[0], stiffness_damping[0]);
   Vec3<Real> pc[8], yb[8], pb[8], y[8];
   load_cell_corners(u, cell_nodes, i, pc);
@@ -222,13 +222,10 @@ SSC_HD inline void adj_newmark_solve_cell(int i, const PartContext<Real>& cx, co
   }
   const Mat3<Real> R = load_mat3(rotation, i);
   Mat3<Real> R_bar = zero33<Real>();
-  Real l = Real(0), m = Real(0);
-  adj_corotated_apply(R, cell_weights + 8 * i, lambda[0], mu[0], cx.h, pc, yb, R_bar, l, m, pb);
+  adj_corotated_apply(R, cell_weights + 8 * i, lambda[i], mu[i], cx.h, pc, yb, R_bar, lambda_bar[i], mu_bar[i], pb);
   add_mat3(rotation_bar, i, R_bar);
-  corotated_apply(R, cell_weights + 8 * i, lambda[0], mu[0], cx.h, pc, y);
+  corotated_apply(R, cell_weights + 8 * i, lambda[i], mu[i], cx.h, pc, y);
   for (int k = 0; k < 8; ++k) store3(ku, 8 * i + k, y[k]);
-  lame_bar_share[2 * i] = l;
-  lame_bar_share[2 * i + 1] = m;
 }
 
 // Node i: the mass's and C's share of -w^T A u, and the coefficients' shares (a_m, a_k;
@@ -286,21 +283,21 @@ inline OpSpec newmark_solve_spec() {
   s.name = "newmark_solve";
   s.domain = Domain::Node;
   s.solver = "newmark_pcg";
-  s.slots = {in("rotation", Access::Opaque), in("lambda"), in("mu"), in("mass", Access::Opaque), in("rhs", Access::Opaque),
+  s.slots = {in("rotation", Access::Opaque), in("lambda", Access::Opaque), in("mu", Access::Opaque),
+             in("mass", Access::Opaque), in("rhs", Access::Opaque),
              constant_in("u_prev", Access::Opaque), constant_in("v_prev", Access::Opaque),
              constant_in("fixed", Access::Opaque), optional_in("damping", Access::Opaque), constant_in("dt"),
              constant_in("theta"), in("mass_damping"), in("stiffness_damping"), out("u"), out("cg_iterations")};
   s.slots.back().differentiable = false;
-  s.scratch = {{"w", Domain::Node, 3}, {"ku", Domain::Cell, 24}, {"red", Domain::Cell, 2}, {"red2", Domain::Node, 2}};
+  s.scratch = {{"w", Domain::Node, 3}, {"ku", Domain::Cell, 24}, {"red", Domain::Node, 2}};
   s.adjoint = {part("newmark_solve_rhs", Extent::Node, SSC_ADJOINT_PART(adj_newmark_solve_rhs), {"$w", "d_rhs"}),
                part("newmark_solve_cells", Extent::Cell, SSC_ADJOINT_PART(adj_newmark_solve_cell),
                     {"dt", "theta", "mass_damping", "stiffness_damping", "rotation", "#cell_weights", "#cell_nodes",
-                     "lambda", "mu", "u^", "$w^", "d_rotation", "$ku", "$red"}),
+                     "lambda", "mu", "u^", "$w^", "d_rotation", "$ku", "d_lambda", "d_mu"}),
                part("newmark_solve_nodes", Extent::Node, SSC_ADJOINT_PART(adj_newmark_solve_node),
                     {"dt", "theta", "mass_damping", "stiffness_damping", "mass", "fixed", "u", "$w", "$ku^",
-                     "#node_cell_offset", "#node_cell_entry", "d_mass", "d_damping", "$red2"}),
-               reduction("newmark_solve_reduce", {"$red", "$red2"},
-                         {"d_lambda", "d_mu", "d_mass_damping", "d_stiffness_damping"})};
+                     "#node_cell_offset", "#node_cell_entry", "d_mass", "d_damping", "$red"}),
+               reduction("newmark_solve_reduce", {"$red"}, {"d_mass_damping", "d_stiffness_damping"})};
   return s;
 }
 

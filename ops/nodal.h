@@ -53,17 +53,24 @@ SSC_HD inline void adj_node_mass_node(int i, const PartContext<Real>&, const Rea
   density_bar_share[i] = s;
 }
 
-// ---- the node_force op: gravity plus the gathered corner and (optional) contact point forces ----
+// ---- the node_force op: gravity plus the gathered corner and (optional) contact point forces
+// and (optional) node forces of other ops (air drag) ----
 
 template <class Real>
 SSC_HD inline void node_force_node(int i, const PartContext<Real>&, const Real* corner_force, const int* node_cell_offset,
                                    const int* node_cell_entry, const Real* point_force, const Real* point_t,
-                                   const int* node_point_offset, const int* node_point_entry, const Real* mass,
-                                   const Real* gravity, Real* force) {
+                                   const int* node_point_offset, const int* node_point_entry, const Real* body_force,
+                                   const Real* mass, const Real* gravity, Real* force) {
   const Vec3<Real> corners = gather_corner_sum(corner_force, node_cell_offset, node_cell_entry, i);
-  const Vec3<Real> points =
+  Vec3<Real> points =
       point_force ? gather_point_sum(point_force, point_t, node_point_offset, node_point_entry, i) : zero3<Real>();
+  if (body_force) points += load3(body_force, i);
   store3(force, i, node_force(mass[i], load3(gravity, 0), corners, points));
+}
+
+template <class Real>
+SSC_HD inline void adj_node_force_body(int i, const PartContext<Real>&, const Real* force_bar, Real* body_force_bar) {
+  add3(body_force_bar, i, load3(force_bar, i));
 }
 
 // The corners' cotangents: each corner takes its node's force cotangent.
@@ -108,18 +115,20 @@ inline OpSpec node_force_spec() {
   OpSpec s;
   s.name = "node_force";
   s.domain = Domain::Node;
-  s.slots = {in("corner_force", Access::Gather), optional_in("point_force", Access::Gather), in("mass"), in("gravity"),
-             out("force")};
+  s.slots = {in("corner_force", Access::Gather), optional_in("point_force", Access::Gather), optional_in("body_force"),
+             in("mass"), in("gravity"), out("force")};
   s.scratch = {{"red", Domain::Node, 3}};
   s.forward = {part("node_force", Extent::Node, SSC_PART(node_force_node),
                     {"corner_force^", "#node_cell_offset", "#node_cell_entry", "point_force^", "#point_t",
-                     "#node_point_offset", "#node_point_entry", "mass", "gravity", "force"})};
+                     "#node_point_offset", "#node_point_entry", "body_force", "mass", "gravity", "force"})};
   s.adjoint = {
       part("node_force_corners", Extent::Cell, SSC_ADJOINT_PART(adj_node_force_corners),
            {"d_force^", "#cell_nodes", "d_corner_force"}),
       when_bound(part("node_force_points", Extent::Point, SSC_ADJOINT_PART(adj_node_force_points),
                       {"d_force^", "#point_nodes", "#point_t", "d_point_force"}),
                  "point_force"),
+      when_bound(part("node_force_body", Extent::Node, SSC_ADJOINT_PART(adj_node_force_body), {"d_force", "d_body_force"}),
+                 "body_force"),
       part("node_force", Extent::Node, SSC_ADJOINT_PART(adj_node_force_node),
            {"mass", "gravity", "d_force", "d_mass", "$red"}),
       reduction("node_force_reduce", {"$red"}, {"d_gravity"})};

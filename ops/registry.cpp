@@ -2,6 +2,7 @@
 // its ops/ header, compiled here only (SSC_OP_SPECS).
 #define SSC_OP_SPECS
 #include "graph/part_loop.h"
+#include "ops/air_drag.h"
 #include "ops/contact.h"
 #include "ops/corotation.h"
 #include "ops/elasticity.h"
@@ -9,17 +10,20 @@
 #include "ops/friction.h"
 #include "ops/newmark.h"
 #include "ops/nodal.h"
+#include "ops/stiffness_field.h"
 
 namespace ssc {
 
 const std::vector<OpSpec>& op_registry() {
   static const std::vector<OpSpec> registry = {
+      ops::stiffness_field_spec(),
       ops::lame_spec(),
       ops::node_mass_spec(),
       ops::corotation_spec(),
       ops::corotation_force_spec(),
       ops::contact_force_spec(),
       ops::friction_spec(),
+      ops::air_drag_spec(),
       ops::node_force_spec(),
       ops::stiffness_apply_spec(),
       ops::newmark_rhs_spec(),

@@ -42,8 +42,7 @@ Interpreter<Real>::Interpreter(const Graph& graph, const StaticArrays& grid, int
     const OpSpec& spec = *graph.ops()[o].spec;
     for (const ScratchSpec& s : spec.scratch) {
       Scratch& buffer = scratch_[o][s.key];
-      const int components =
-          s.components > 0 ? s.components : graph.tensor(graph.ops()[o].input(s.like_slot)).components;
+      const int components = scratch_components(graph, graph.ops()[o], s);
       buffer.stride = size_t(sizes_.count(s.domain)) * components;
       buffer.is_double = spec.scratch_type(s.key) == "double";
       if (buffer.is_double)

@@ -41,7 +41,7 @@ struct NewmarkSystem {
   const StaticArrays& g;
   const Real* weights;
   const Real* rotation;
-  Real lambda, mu;
+  const Real *lambda, *mu;  // per cell
   const Real* mass;
   const Real* fixed;
   const Real* damping;  // C, 6 per node, or nullptr
@@ -58,7 +58,7 @@ struct NewmarkSystem {
     const ops::PartContext<Real> cx{Real(g.h), g.cell_count, g.node_count, 0, 0, 0};
 #pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
     for (int e = 0; e < g.cell_count; ++e)
-      ops::stiffness_apply_cell(e, cx, rotation, weights, &lambda, &mu, p, g.cell_nodes.data(), corner);
+      ops::stiffness_apply_cell(e, cx, rotation, weights, lambda, mu, p, g.cell_nodes.data(), corner);
   }
 
   void apply(const Real* p, Real* q, std::vector<Real>& corner) const {
@@ -78,7 +78,7 @@ struct NewmarkSystem {
 #pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
     for (int e = 0; e < g.cell_count; ++e) {
       Vec3<Real> d[8];
-      ops::corotated_diagonal(ops::load_mat3(rotation, e), weights + 8 * e, lambda, mu, h, d);
+      ops::corotated_diagonal(ops::load_mat3(rotation, e), weights + 8 * e, lambda[e], mu[e], h, d);
       for (int k = 0; k < 8; ++k) store3(corner.data(), 8 * e + k, d[k]);
     }
     for (int i = 0; i < g.node_count; ++i) {
@@ -101,7 +101,7 @@ NewmarkSystem<Real> newmark_system(Interpreter<Real>& in, const Slots<Real>& a) 
   const auto c = ops::newmark_coefficients(a.scalar("dt"), a.scalar("theta"), a.scalar("mass_damping"),
                                            a.scalar("stiffness_damping"));
   return NewmarkSystem<Real>{in.grid(),          in.static_real("cell_weights"), a.value("rotation"),
-                             a.scalar("lambda"), a.scalar("mu"),                 a.value("mass"),
+                             a.value("lambda"),  a.value("mu"),                  a.value("mass"),
                              a.value("fixed"),   a.optional("damping"),          c};
 }
 

@@ -9,6 +9,11 @@ std::vector<NamedStaticArray> named_static_arrays(const StaticArrays& g) {
   auto reals = [&](const char* name, std::vector<double> v) { a.push_back({name, false, {}, std::move(v)}); };
   ints("cell_nodes", g.cell_nodes);
   reals("cell_weights", g.cell_volume_weights);
+  reals("cell_offset", g.cell_offset);
+  reals("cell_surface_weights", g.cell_surface_weights);
+  reals("cell_rest_normal", g.cell_rest_normal);
+  ints("cell_region", g.cell_region);
+  ints("region_count", g.region_count);
   reals("node_volume", g.node_volume);
   reals("node_rest", g.node_rest);
   ints("node_cell_offset", g.node_cell_offset);

@@ -22,6 +22,16 @@ struct StaticArrays {
 
   std::vector<int> cell_nodes;              // 8 per cell: active node id of each corner
   std::vector<double> cell_volume_weights;  // 8 per cell, m^3 (at least the floor)
+  // The surface in each cell (ops/air_drag.h): per corner the integral of N_c over the rest
+  // surface (8 per cell, m^2), and the outward unit normal (3 per cell, rest; 0 without surface).
+  std::vector<double> cell_surface_weights;
+  std::vector<double> cell_rest_normal;
+  // The heterogeneous body (ops/stiffness_field.h): each cell's rest centroid minus the body's
+  // rest centre of mass (3 per cell, m), its material region (-1: none) and the region count
+  // (one entry).
+  std::vector<double> cell_offset;
+  std::vector<int> cell_region;
+  std::vector<int> region_count{0};
 
   std::vector<double> node_rest;            // 3 per active node, world position
   std::vector<double> node_volume;          // per active node: sum of its corner weights, m^3

@@ -66,12 +66,13 @@ TEST(CodegenPlan, TorusSnapshot) {
 TEST(CodegenPlan, FusionAndCuts) {
   const TimestepGraph t = build_timestep_graph(1, true);
   const KernelPlan plan = plan_kernels(t.graph);
-  // Corotation and its offset force share the cell kernel (pointwise rotation).
-  const PlannedKernel* corot = plan.find(false, "corotation");
+  // The Lame parameters, the corotation and its offset force share the cell kernel (pointwise).
+  const PlannedKernel* corot = plan.find(false, "lame");
   ASSERT_NE(corot, nullptr);
-  ASSERT_EQ(corot->parts.size(), 2u);
-  EXPECT_EQ(corot->parts[1].label, "corotation_force");
-  EXPECT_EQ(corot->name.rfind("fwd_cell_corotation_corotation_force__", 0), 0u) << corot->name;
+  ASSERT_EQ(corot->parts.size(), 3u);
+  EXPECT_EQ(corot->parts[0].label, "lame");
+  EXPECT_EQ(corot->parts[2].label, "corotation_force");
+  EXPECT_EQ(corot->name.rfind("fwd_cell_lame_corotation_corotation_force__", 0), 0u) << corot->name;
   // The solve is a solver sequence, each stage its own kernel.
   for (const char* label : {"newmark_apply_cell", "newmark_apply_node", "pcg_start", "pcg_iterate", "extension_apply"})
     EXPECT_NE(plan.find(false, label), nullptr) << label;
@@ -79,7 +80,11 @@ TEST(CodegenPlan, FusionAndCuts) {
   // The adjoint runs ops in reverse: the first adjoint kernel belongs to the last op.
   ASSERT_FALSE(plan.adjoint.empty());
   EXPECT_EQ(plan.adjoint.front().ops.front(), int(t.graph.ops().size()) - 1);
-  EXPECT_NE(plan.find(true, "corotation"), nullptr);
+  // The Lame cotangents are per cell: the corotation's adjoint fuses behind its force's.
+  const PlannedKernel* adj_corot = plan.find(true, "corotation_force");
+  ASSERT_NE(adj_corot, nullptr);
+  ASSERT_EQ(adj_corot->parts.size(), 2u);
+  EXPECT_EQ(adj_corot->parts[1].label, "corotation");
   EXPECT_NE(plan.find(true, "stiffness_apply"), nullptr);
 }
 
@@ -126,11 +131,15 @@ std::vector<KernelSource> example_kernel_sources(const std::string& real) {
   std::set<std::string> seen;
   struct Variant {
     int planes;
-    bool extension, friction;
+    bool extension;
+    TimestepModel model;
   };
-  for (const Variant v : {Variant{1, true, false}, Variant{0, false, false}, Variant{1, false, false},
-                          Variant{2, true, true}}) {
-    const TimestepGraph t = build_timestep_graph(v.planes, v.extension, v.friction);
+  TimestepModel every;  // every extension
+  every.friction = every.stiffness_gradient = every.air_drag = true;
+  every.region_count = 2;
+  for (const Variant& v : {Variant{1, true, {}}, Variant{0, false, {}}, Variant{1, false, {}},
+                           Variant{2, true, TimestepModel{true}}, Variant{2, true, every}}) {
+    const TimestepGraph t = build_timestep_graph(v.planes, v.extension, v.model);
     const KernelPlan plan = plan_kernels(t.graph);
     for (const PlannedKernel* k : plan.unique_kernels())
       if (seen.insert(k->name).second) out.push_back({k->name, kernel_source(*k, {real, 128})});

@@ -45,6 +45,10 @@ json check_scene() {
   j["grid"] = {{"cell_size", 0.1}, {"band_width", 2}};
   j["material"] = {{"youngs_modulus", 2e4}, {"poisson_ratio", 0.3}, {"density", 100},
                    {"mass_damping", 0.2},   {"stiffness_damping", 0.01}};
+  j["material"]["regions"] = {{{"normal", {1, 0, 0}}, {"offset", 0.05}, {"youngs_modulus", 5e4}},
+                              {{"min", {-0.3, 0.3, -0.3}}, {"max", {0.0, 0.5, 0.3}}, {"youngs_modulus", 1e4}}};
+  j["material"]["stiffness_gradient"] = {0.5, -0.3, 0.2};
+  j["air_drag"] = 30.0;
   j["gravity"] = {0, -9.81, 0};
   j["initial"] = {{"linear_velocity", {0.4, -1.2, 0.25}}, {"angular_velocity", {1.5, -2.0, 3.0}}};
   j["ground"] = {{"planes",
@@ -121,7 +125,7 @@ std::vector<std::vector<double>> dual_forward(const Graph& g, const StaticArrays
       reals[a.name].assign(a.reals.begin(), a.reals.end());
   }
   for (const ScratchSpec& s : op.spec->scratch) {
-    const int c = s.components > 0 ? s.components : g.tensor(op.input(s.like_slot)).components;
+    const int c = scratch_components(g, op, s);
     scratch[s.key].assign(size_t(sizes.count(s.domain)) * c, D(0.0));
   }
   const ops::PartContext<D> cx{D(grid.h), sizes.cell, sizes.node, sizes.point, sizes.band, g.plane_count()};

@@ -662,7 +662,8 @@ TEST(ParameterSpaceNames, ListAndSetGetRoundTripForEveryName) {
       "initial.linear_velocity.x", "initial.linear_velocity.y", "initial.linear_velocity.z", "initial.angular_velocity.x",
       "initial.angular_velocity.y", "initial.angular_velocity.z", "ground.height", "ground.polar_deg", "ground.azimuth_deg",
       "ground.friction", "ground.friction_velocity", "ground.planes[1].height", "ground.planes[1].polar_deg",
-      "ground.planes[1].azimuth_deg", "ground.planes[1].friction", "ground.planes[1].friction_velocity"};
+      "ground.planes[1].azimuth_deg", "ground.planes[1].friction", "ground.planes[1].friction_velocity",
+      "material.stiffness_gradient.x", "material.stiffness_gradient.y", "material.stiffness_gradient.z", "air_drag"};
   EXPECT_EQ(names, expected);
   // The getters read the fields (angles from the normal).
   EXPECT_EQ(get_parameter(p0, "youngs_modulus"), 5000);

@@ -17,13 +17,16 @@ PhysicalParameters two_planes() {
   p.gravity = {0, -9.81, 0};
   p.planes.resize(2);
   p.planes[1].normal = normal_from_angles(20, 40);
+  p.region_youngs = {2e4};
   return p;
 }
 
 TEST(ParameterTable, EveryRowIsUniqueAndReadsBackWhatItWrites) {
   const PhysicalParameters p = two_planes();
   const std::vector<ParameterRow> table = parameter_table(p);
-  EXPECT_EQ(table.size(), 5u + 9u + 2u * 5u);  // per plane: height, two angles, friction, friction velocity
+  // per plane: height, two angles, friction, friction velocity; per material region its
+  // modulus; the stiffness gradient; air drag
+  EXPECT_EQ(table.size(), 5u + 9u + 2u * 5u + 1u + 3u + 1u);
   std::set<std::string> names, keys;
   for (const ParameterRow& r : table) {
     EXPECT_TRUE(names.insert(r.name).second) << r.name;
@@ -50,6 +53,12 @@ TEST(ParameterTable, EveryRowIsUniqueAndReadsBackWhatItWrites) {
   g.input["friction"] = {1, 2, 3, 4};
   EXPECT_EQ(mu1->gradient(g, p), 3);
   EXPECT_EQ(find_parameter_row(table, "ground.friction_velocity")->gradient(g, p), 2);
+  const ParameterRow* region = find_parameter_row(table, "material.regions[0].youngs_modulus");
+  ASSERT_NE(region, nullptr);
+  EXPECT_EQ(region->graph_input, "region_youngs");
+  EXPECT_EQ(parameter_row("material.regions[3].youngs_modulus").unit, "Pa");
+  EXPECT_EQ(find_parameter_row(table, "material.stiffness_gradient.z")->scene_key, "material.stiffness_gradient[2]");
+  EXPECT_EQ(find_parameter_row(table, "air_drag")->graph_input, "air_drag");
 }
 
 TEST(ParameterTable, RangesAndUnitsAreTheModelsOwn) {

@@ -72,6 +72,7 @@ void integrate_cells(SimGrid& g, const GridOptions& opt) {
   const double floor = opt.min_node_volume * g.h * g.h * g.h / 8.0;
   g.cell_volume_weights.resize(8 * size_t(g.cell_count));
   g.cell_surface_weights.resize(8 * size_t(g.cell_count));
+  g.cell_rest_normal.assign(3 * size_t(g.cell_count), 0.0);
   g.cell_volume.resize(g.cell_count);
   g.cell_area.resize(g.cell_count);
   int floored = 0;
@@ -81,9 +82,26 @@ void integrate_cells(SimGrid& g, const GridOptions& opt) {
     std::array<double, 8> phi;
     for (int c = 0; c < 8; ++c) phi[c] = g.sdf.phi[idx[c]];
     const CutCellIntegrals r = integrate_cut_cell(phi, g.h, opt.integration_subdivisions);
+    // A surface on a cell face (phi = 0 at its corners: faces on grid planes) is counted by
+    // the empty cell beyond it, which is not simulated; the surface weights take it inside
+    // (phi + 1e-6 h).
+    bool on_face = false;
+    std::array<double, 8> shifted;
+    for (int c = 0; c < 8; ++c) {
+      on_face = on_face || phi[c] == 0;
+      shifted[c] = phi[c] + 1e-6 * g.h;
+    }
+    const CutCellIntegrals s = on_face ? integrate_cut_cell(shifted, g.h, opt.integration_subdivisions) : r;
     for (int c = 0; c < 8; ++c) {
       g.cell_volume_weights[8 * e + c] = std::max(r.volume[c], floor);
-      g.cell_surface_weights[8 * e + c] = r.surface[c];
+      g.cell_surface_weights[8 * e + c] = s.surface[c];
+    }
+    if (s.area_total > 0) {  // the trilinear phi's gradient at the cell centre
+      Eigen::Vector3d n = Eigen::Vector3d::Zero();
+      for (int c = 0; c < 8; ++c)
+        for (int a = 0; a < 3; ++a) n[a] += ((c >> a) & 1 ? phi[c] : -phi[c]) / (4 * g.h);
+      if (n.norm() > 0) n.normalize();
+      for (int a = 0; a < 3; ++a) g.cell_rest_normal[3 * size_t(e) + a] = n[a];
     }
     for (int c = 0; c < 8; ++c) floored += r.volume[c] < floor;
     g.cell_volume[e] = r.volume_total;
@@ -115,6 +133,28 @@ void build_node_cell_incidence(SimGrid& g) {
   double lumped = 0;
   for (double v : g.node_volume) lumped += v;
   g.rest_center_of_mass = moment / lumped;
+
+  // Each cell's rest centroid of its inside part: sum_c w_c x_c / sum_c w_c (the trilinear
+  // shape functions reproduce x, so this is the centroid of the weighted part).
+  g.cell_center.assign(3 * size_t(g.cell_count), 0.0);
+  g.cell_offset.assign(3 * size_t(g.cell_count), 0.0);
+  for (int e = 0; e < g.cell_count; ++e) {
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    double w = 0;
+    for (int c = 0; c < 8; ++c) {
+      const int n = g.cell_nodes[8 * e + c];
+      const double wc = g.cell_volume_weights[8 * e + c];
+      x += wc * Eigen::Vector3d(g.node_rest[3 * n], g.node_rest[3 * n + 1], g.node_rest[3 * n + 2]);
+      w += wc;
+    }
+    x /= w;
+    for (int k = 0; k < 3; ++k) {
+      g.cell_center[3 * e + k] = x[k];
+      g.cell_offset[3 * e + k] = x[k] - g.rest_center_of_mass[k];
+    }
+  }
+  g.cell_region.assign(g.cell_count, -1);
+  g.region_count = {0};
 }
 
 // The 12 edges of a cell as corner pairs.

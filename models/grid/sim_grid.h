@@ -33,9 +33,9 @@ struct SimGrid : StaticArrays {
   SdfGrid sdf;  // rest SDF after the zero cutoff
 
   std::vector<long> cell_origin;              // flat SDF index of corner 0, per cell
-  std::vector<double> cell_surface_weights;   // 8 per cell, m^2
   std::vector<double> cell_volume;            // per cell, m^3
   std::vector<double> cell_area;              // per cell, m^2
+  std::vector<double> cell_center;            // 3 per cell: rest centroid of its inside part, m
   std::vector<int> cell_at_origin;            // per SDF node: id of the cell whose corner 0 it is, or -1
 
   std::vector<long> node_grid;                // flat SDF index per active node

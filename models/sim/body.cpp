@@ -83,9 +83,29 @@ static double closed_mesh_volume(const TriangleMesh& mesh, double scale, int* bo
   return *boundary > 0 || !consistent ? 0 : std::abs(v) * std::pow(scale, 3);
 }
 
+void assign_material_regions(const Scene& scene, SimGrid& grid) {
+  const std::vector<MaterialRegion>& regions = scene.material.regions;
+  grid.region_count = {int(regions.size())};
+  std::vector<int> cells(regions.size(), 0);
+  for (int e = 0; e < grid.cell_count; ++e) {
+    const Eigen::Vector3d x(grid.cell_center[3 * e], grid.cell_center[3 * e + 1], grid.cell_center[3 * e + 2]);
+    grid.cell_region[e] = -1;
+    for (size_t r = 0; r < regions.size(); ++r)
+      if (regions[r].contains(x)) grid.cell_region[e] = int(r);
+    if (grid.cell_region[e] >= 0) ++cells[size_t(grid.cell_region[e])];
+  }
+  for (size_t r = 0; r < regions.size(); ++r)
+    if (cells[r] == 0)
+      warn("empty_region", fmt::format("{}: material.regions[{}] holds no cell of the body (a cell belongs to the region "
+                                       "that contains its rest centroid, later regions first); its youngs_modulus has "
+                                       "no effect",
+                                       scene.file, r));
+}
+
 SimGrid build_body_grid(const Scene& scene) {
   const std::string source = scene.object.path.empty() ? scene.file + ": object" : scene.object.path;
   SimGrid grid = build_sim_grid(build_rest_sdf(scene), scene.grid, source);
+  assign_material_regions(scene, grid);
   double reference = 0;
   if (scene.object.kind == ObjectSpec::Kind::Primitive) reference = primitive_volume(scene.object.primitive);
   if (scene.object.kind == ObjectSpec::Kind::Mesh) {

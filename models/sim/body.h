@@ -16,6 +16,9 @@ constexpr double kVolumeLossWarning = 0.05, kVolumeLossError = 0.5;
 
 SdfGrid build_rest_sdf(const Scene& scene);
 SimGrid build_body_grid(const Scene& scene);
+// Each cell's material region (StaticArrays::cell_region): the last region of the scene that
+// contains the cell's rest centroid; warns about regions that hold no cell.
+void assign_material_regions(const Scene& scene, SimGrid& grid);
 double primitive_volume(const Primitive& p);
 
 }  // namespace ssc

@@ -131,6 +131,39 @@ void add_plane_rows(std::vector<ParameterRow>& rows, size_t k) {
   }
 }
 
+// The heterogeneous_stiffness extension (ops/stiffness_field.h): each region's modulus and the
+// stiffness gradient's components, written into their graph inputs as they are.
+void add_stiffness_field_rows(std::vector<ParameterRow>& rows, size_t region_count) {
+  for (size_t k = 0; k < region_count; ++k) {
+    ParameterRow r;
+    r.name = fmt::format("material.regions[{}].youngs_modulus", k);
+    r.unit = "Pa";
+    r.mass = 1, r.length = -1, r.time = -2;
+    r.transform = ParameterRow::Transform::Positive;
+    r.lower = 0;
+    r.scene_key = r.name;
+    r.graph_input = "region_youngs";
+    r.graph_component = int(k);
+    r.get = [k](const PhysicalParameters& p) { return p.region_youngs[k]; };
+    r.set = [k](PhysicalParameters& p, double v) { p.region_youngs[k] = v; };
+    r.gradient = [k](const ParameterGradient& g, const PhysicalParameters&) { return g.input_entry("region_youngs", int(k)); };
+    rows.push_back(r);
+  }
+  for (int a = 0; a < 3; ++a) {
+    ParameterRow r;
+    r.name = fmt::format("material.stiffness_gradient.{}", kAxes[a]);
+    r.unit = "1/m";
+    r.length = -1;
+    r.scene_key = fmt::format("material.stiffness_gradient[{}]", a);
+    r.graph_input = "stiffness_gradient";
+    r.graph_component = a;
+    r.get = [a](const PhysicalParameters& p) { return p.stiffness_gradient[a]; };
+    r.set = [a](PhysicalParameters& p, double v) { p.stiffness_gradient[a] = v; };
+    r.gradient = [a](const ParameterGradient& g, const PhysicalParameters&) { return g.input_entry("stiffness_gradient", a); };
+    rows.push_back(r);
+  }
+}
+
 }  // namespace
 
 std::string ParameterRow::value_error(double value) const {
@@ -163,6 +196,18 @@ std::vector<ParameterRow> parameter_table(const PhysicalParameters& p) {
   add_vector_rows(rows, "initial.linear_velocity", "m/s", 1, -1, &PP::linear_velocity, &PG::linear_velocity, "v_prev");
   add_vector_rows(rows, "initial.angular_velocity", "rad/s", 0, -1, &PP::angular_velocity, &PG::angular_velocity, "v_prev");
   for (size_t k = 0; k < p.planes.size(); ++k) add_plane_rows(rows, k);
+  add_stiffness_field_rows(rows, p.region_youngs.size());
+  ParameterRow drag;  // ops/air_drag.h
+  drag.name = drag.scene_key = drag.graph_input = "air_drag";
+  drag.unit = "kg/m^3";
+  drag.mass = 1, drag.length = -3;
+  drag.transform = ParameterRow::Transform::Positive;
+  drag.lower = 0, drag.lower_inclusive = true;
+  drag.graph_component = 0;
+  drag.get = [](const PhysicalParameters& p) { return p.air_drag; };
+  drag.set = [](PhysicalParameters& p, double v) { p.air_drag = v; };
+  drag.gradient = [](const ParameterGradient& g, const PhysicalParameters&) { return g.input_entry("air_drag", 0); };
+  rows.push_back(drag);
   return rows;
 }
 
@@ -175,11 +220,12 @@ const ParameterRow* find_parameter_row(const std::vector<ParameterRow>& table, c
 ParameterRow parameter_row(const std::string& name) {
   PhysicalParameters shape;
   shape.planes.resize(1);
-  const size_t open = name.find("ground.planes[");
-  if (open == 0) {
-    const int k = std::atoi(name.c_str() + 14);
-    if (k >= 0 && k < 64) shape.planes.resize(size_t(k) + 1);
-  }
+  // The index in "ground.planes[k]." or "material.regions[k].", or -1.
+  const auto index_after = [&](const std::string& prefix) {
+    return name.rfind(prefix, 0) == 0 ? std::atoi(name.c_str() + prefix.size()) : -1;
+  };
+  if (const int k = index_after("ground.planes["); k >= 0 && k < 64) shape.planes.resize(size_t(k) + 1);
+  if (const int k = index_after("material.regions["); k >= 0 && k < 64) shape.region_youngs.resize(size_t(k) + 1);
   const std::vector<ParameterRow> table = parameter_table(shape);
   if (const ParameterRow* r = find_parameter_row(table, name)) return *r;
   throw InputError(fmt::format("unknown parameter '{}'", name));

@@ -14,9 +14,14 @@ namespace {
 
 // The parameter name of a scene-key spelling ("material.youngs_modulus",
 // "ground.planes[0].height"), or the name itself.
+bool is_stiffness_field_name(const std::string& name) {
+  return name.rfind("material.regions[", 0) == 0 || name.rfind("material.stiffness_gradient", 0) == 0;
+}
+
 std::string canonical_parameter_name(const std::string& name) {
   const std::string material = "material.";
-  if (name.rfind(material, 0) == 0 && parameter_row(name.substr(material.size())).scene_key == name)
+  if (name.rfind(material, 0) == 0 && !is_stiffness_field_name(name) &&
+      parameter_row(name.substr(material.size())).scene_key == name)
     return name.substr(material.size());
   const std::string first_plane = "ground.planes[0].";
   if (name.rfind(first_plane, 0) == 0) return "ground." + name.substr(first_plane.size());
@@ -69,8 +74,8 @@ std::vector<std::string> expand_parameter_names(const std::vector<std::string>& 
 bool apply_parameter_override(nlohmann::json& config, const std::string& given, const nlohmann::json& value,
                               const std::string& file) {
   // A scene key (material.youngs_modulus, ground.height, ground.friction) is left to the scene parser.
-  if (given.rfind("material.", 0) == 0 || given == "ground.height" || given == "ground.friction" ||
-      given == "ground.friction_velocity")
+  if ((given.rfind("material.", 0) == 0 && !is_stiffness_field_name(given)) || given == "ground.height" ||
+      given == "ground.friction" || given == "ground.friction_velocity")
     return false;
   const std::string name = canonical_parameter_name(given);
   const bool plane_name = name.rfind("ground.", 0) == 0;
@@ -86,18 +91,33 @@ bool apply_parameter_override(nlohmann::json& config, const std::string& given, 
   const double x = value.get<double>();
   if (const std::string why = row.value_error(x); !why.empty())
     throw InputError(fmt::format("{}: --set {}={}: {}", file, given, value.dump(), why));
-  if (row.scene_key.rfind("material.", 0) == 0) {
+  if (row.scene_key.rfind("material.", 0) == 0 && !is_stiffness_field_name(name)) {
     config["material"][name] = x;
     return true;
   }
   PhysicalParameters p = PhysicalParameters::from_scene(parse_scene(config, file));
   const std::vector<ParameterRow> table = parameter_table(p);
   const ParameterRow* scene_row = find_parameter_row(table, name);
+  if (!scene_row && is_stiffness_field_name(name))
+    throw InputError(fmt::format("{}: --set {}: the scene has {} material region(s) (material.regions[0..{}])", file,
+                                 given, p.region_youngs.size(), int(p.region_youngs.size()) - 1));
   if (!scene_row)
     throw InputError(fmt::format("{}: --set {}: the scene has {} ground plane(s) (ground.planes[0..{}])", file, given,
                                  p.planes.size(), int(p.planes.size()) - 1));
   scene_row->set(p, x);
   const std::string& key = scene_row->scene_key;
+  if (name.rfind("material.regions[", 0) == 0) {
+    config["material"]["regions"][size_t(std::atoi(key.c_str() + key.find('[') + 1))]["youngs_modulus"] = x;
+    return true;
+  }
+  if (key.find('[') == std::string::npos && key.find('.') == std::string::npos) {  // a top-level number (air_drag)
+    config[key] = x;
+    return true;
+  }
+  if (name.rfind("material.stiffness_gradient", 0) == 0) {
+    config["material"]["stiffness_gradient"] = {p.stiffness_gradient[0], p.stiffness_gradient[1], p.stiffness_gradient[2]};
+    return true;
+  }
   if (!plane_name) {  // a vector component, "gravity[1]": the whole vector is written
     const std::string base = key.substr(0, key.find('['));
     Eigen::Vector3d v;

@@ -120,6 +120,71 @@ void read_ground(const JsonReader& r, Scene& s) {
   r.reject_unknown_keys();
 }
 
+MaterialRegion read_region(const JsonReader& r) {
+  MaterialRegion g;
+  const bool half_space = r.has("normal") || r.has("offset");
+  const bool box = r.has("min") || r.has("max");
+  if (half_space == box)
+    r.fail("", "must be a half-space (normal, offset: the rest points x with normal . x >= offset) or a box (min, max), "
+               "each with its youngs_modulus");
+  if (half_space) {
+    const Eigen::Vector3d n = r.vec3("normal");
+    r.require(n.norm() > 1e-12, "normal", "must not be the zero vector");
+    g.normal = n.normalized();
+    g.offset = r.number("offset");
+  } else {
+    g.kind = MaterialRegion::Kind::Box;
+    g.min = r.vec3("min");
+    g.max = r.vec3("max");
+    r.require((g.max - g.min).minCoeff() >= 0, "max", "must not be below min in any axis");
+  }
+  g.youngs_modulus = r.positive("youngs_modulus", r.number("youngs_modulus"));
+  r.reject_unknown_keys();
+  return g;
+}
+
+void read_material(const JsonReader& m, MaterialSpec& mat) {
+  mat.youngs_modulus = m.positive("youngs_modulus", m.number("youngs_modulus", mat.youngs_modulus));
+  mat.poisson_ratio = m.number("poisson_ratio", mat.poisson_ratio);
+  m.require(mat.poisson_ratio > 0 && mat.poisson_ratio < 0.5, "poisson_ratio",
+            fmt::format("must be in (0, 0.5), found {}", mat.poisson_ratio));
+  mat.density = m.positive("density", m.number("density", mat.density));
+  mat.mass_damping = m.non_negative("mass_damping", m.number("mass_damping", mat.mass_damping));
+  mat.stiffness_damping = m.non_negative("stiffness_damping", m.number("stiffness_damping", mat.stiffness_damping));
+  if (m.has("regions"))
+    for (const JsonReader& g : m.array_of_objects("regions")) mat.regions.push_back(read_region(g));
+  m.require(mat.regions.size() <= 64, "regions", "must hold at most 64 regions");
+  mat.stiffness_gradient_key = m.has("stiffness_gradient");
+  mat.stiffness_gradient = m.vec3("stiffness_gradient", mat.stiffness_gradient);
+  m.reject_unknown_keys();
+}
+
+// The "extensions" section: name -> false switches an extension off (its keys stay valid).
+void read_extensions(const JsonReader& r, Scene& s) {
+  for (const char* name : kExtensionNames)
+    if (!r.boolean(name, true)) s.extensions_off.push_back(name);
+  r.reject_unknown_keys();
+}
+
+// Applies the switches: the model is then the one without the extension.
+void switch_off_extensions(Scene& s) {
+  for (const std::string& name : s.extensions_off) {
+    if (name == "friction") {
+      s.friction_keys = false;
+      for (PlaneSpec& p : s.planes) p.friction = 0;
+    } else if (name == "heterogeneous_stiffness") {
+      s.material.regions.clear();
+      s.material.stiffness_gradient.setZero();
+      s.material.stiffness_gradient_key = false;
+    } else if (name == "second_plane") {
+      if (s.planes.size() > 1) s.planes.resize(1);
+    } else if (name == "air_drag") {
+      s.air_drag = 0;
+      s.air_drag_key = false;
+    }
+  }
+}
+
 void read_grid(const JsonReader& r, Scene& s) {
   if (r.has("cell_size") == r.has("resolution") && s.object.kind != ObjectSpec::Kind::SdfFile)
     r.fail("", "must give exactly one of cell_size (metres) or resolution (cells across the object's longest side)");
@@ -143,6 +208,14 @@ void read_grid(const JsonReader& r, Scene& s) {
 
 }  // namespace
 
+const char* const kExtensionNames[5] = {"friction", "heterogeneous_stiffness", "second_plane", "nonlinear_material",
+                                        "air_drag"};
+
+bool MaterialRegion::contains(const Eigen::Vector3d& x) const {
+  if (kind == Kind::HalfSpace) return normal.dot(x) >= offset;
+  return (x - min).minCoeff() >= 0 && (max - x).minCoeff() >= 0;
+}
+
 Eigen::Vector3d normal_from_angles(double polar_deg, double azimuth_deg) {
   const double p = polar_deg * kPi / 180.0, a = azimuth_deg * kPi / 180.0;
   return {std::sin(p) * std::cos(a), std::cos(p), std::sin(p) * std::sin(a)};
@@ -159,19 +232,10 @@ Scene parse_scene(const nlohmann::json& config, const std::string& file) {
   } else if (s.object.kind != ObjectSpec::Kind::SdfFile) {
     r.fail("grid", "is missing: give grid.cell_size (metres) or grid.resolution (cells across the object)");
   }
-  if (r.has("material")) {
-    const JsonReader m = r.child("material");
-    MaterialSpec& mat = s.material;
-    mat.youngs_modulus = m.positive("youngs_modulus", m.number("youngs_modulus", mat.youngs_modulus));
-    mat.poisson_ratio = m.number("poisson_ratio", mat.poisson_ratio);
-    m.require(mat.poisson_ratio > 0 && mat.poisson_ratio < 0.5, "poisson_ratio",
-              fmt::format("must be in (0, 0.5), found {}", mat.poisson_ratio));
-    mat.density = m.positive("density", m.number("density", mat.density));
-    mat.mass_damping = m.non_negative("mass_damping", m.number("mass_damping", mat.mass_damping));
-    mat.stiffness_damping = m.non_negative("stiffness_damping", m.number("stiffness_damping", mat.stiffness_damping));
-    m.reject_unknown_keys();
-  }
+  if (r.has("material")) read_material(r.child("material"), s.material);
   s.gravity = r.vec3("gravity", s.gravity);
+  s.air_drag_key = r.has("air_drag");
+  s.air_drag = r.non_negative("air_drag", r.number("air_drag", s.air_drag));
   if (r.has("initial")) {
     const JsonReader i = r.child("initial");
     s.linear_velocity = i.vec3("linear_velocity", s.linear_velocity);
@@ -215,6 +279,8 @@ Scene parse_scene(const nlohmann::json& config, const std::string& file) {
     s.solver.energy_tolerance = v.non_negative("energy_tolerance", v.number("energy_tolerance", s.solver.energy_tolerance));
     v.reject_unknown_keys();
   }
+  if (r.has("extensions")) read_extensions(r.child("extensions"), s);
+  switch_off_extensions(s);
   for (const char* section : {"observation", "units", "name", "description"})
     if (r.has(section)) s.extra[section] = config.at(section);
   r.reject_unknown_keys();
@@ -248,6 +314,10 @@ bool models_friction(const Scene& scene) {
   for (const PlaneSpec& p : scene.planes)
     if (p.friction > 0) return true;
   return false;
+}
+
+bool models_heterogeneous_stiffness(const Scene& scene) {
+  return !scene.material.regions.empty() || scene.material.stiffness_gradient_key;
 }
 
 }  // namespace ssc

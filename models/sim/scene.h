@@ -19,13 +19,32 @@ struct ObjectSpec {
   Transform transform;  // position, rotation_deg, scale
 };
 
+// A part of the body with its own Young's modulus (the heterogeneous_stiffness extension,
+// ops/stiffness_field.h): the rest points x with normal . x >= offset, or a box.
+struct MaterialRegion {
+  enum class Kind { HalfSpace, Box } kind = Kind::HalfSpace;
+  Eigen::Vector3d normal{1, 0, 0};  // unit
+  double offset = 0;                // m
+  Eigen::Vector3d min = Eigen::Vector3d::Zero(), max = Eigen::Vector3d::Zero();
+  double youngs_modulus = 0;        // Pa
+
+  bool contains(const Eigen::Vector3d& x) const;
+};
+
 struct MaterialSpec {
   double youngs_modulus = 5000;  // Pa
   double poisson_ratio = 0.45;
   double density = 100;          // kg/m^3
   double mass_damping = 0.1;     // alpha, 1/s
   double stiffness_damping = 0.01;  // beta, s
+  std::vector<MaterialRegion> regions;  // later entries override earlier ones
+  Eigen::Vector3d stiffness_gradient = Eigen::Vector3d::Zero();  // g, 1/m: E(x) = E exp(g . (x - c))
+  bool stiffness_gradient_key = false;  // the scene gives material.stiffness_gradient
 };
+
+// The model extensions by name (ops named in docs/scene-format.md); each can be switched off
+// in the scene's "extensions" section without removing its keys.
+extern const char* const kExtensionNames[5];
 
 struct PlaneSpec {
   Eigen::Vector3d normal{0, 1, 0};  // unit
@@ -68,9 +87,13 @@ struct Scene {
   Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();  // rad/s about the centre of mass
   std::vector<PlaneSpec> planes;                                // empty: no ground
+  // Quadratic surface drag, kg/m^3 (ops/air_drag.h); in the model when the key is given.
+  double air_drag = 0;
+  bool air_drag_key = false;
   // Friction is in the model (the timestep graph has the friction op) when the scene gives
   // a friction key, or a command fits or sweeps a friction coefficient; see models_friction.
   bool friction_keys = false;
+  std::vector<std::string> extensions_off;  // switched off in the scene's "extensions" section
   std::vector<DirichletBox> dirichlet;
   TimeSpec time;
   SolverSpec solver;
@@ -87,5 +110,7 @@ Eigen::Vector3d normal_from_angles(double polar_deg, double azimuth_deg);
 
 // Whether the simulation models friction: a friction key in the scene, or a plane with mu > 0.
 bool models_friction(const Scene& scene);
+// Whether the body's stiffness varies: material regions or a stiffness gradient key.
+bool models_heterogeneous_stiffness(const Scene& scene);
 
 }  // namespace ssc

@@ -13,6 +13,7 @@
 #include "ops/elasticity.h"
 #include "ops/gather.h"
 #include "ops/polar.h"
+#include "ops/stiffness_field.h"
 #include "runtime/batch_loop.h"
 #include "runtime/cuda_runtime.h"
 #include "runtime/interpreter_backend.h"
@@ -31,12 +32,15 @@ PhysicalParameters PhysicalParameters::from_scene(const Scene& s) {
   p.linear_velocity = s.linear_velocity;
   p.angular_velocity = s.angular_velocity;
   p.planes = s.planes;
+  for (const MaterialRegion& r : s.material.regions) p.region_youngs.push_back(r.youngs_modulus);
+  p.stiffness_gradient = s.material.stiffness_gradient;
+  p.air_drag = s.air_drag;
   return p;
 }
 
 Simulation::Simulation(const Scene& scene, const SimGrid& grid, int batch, bool extension)
     : grid_(grid),
-      graph_(build_timestep_graph(int(scene.planes.size()), extension, models_friction(scene))),
+      graph_(build_timestep_graph(int(scene.planes.size()), extension, timestep_model(scene))),
       params_(batch, PhysicalParameters::from_scene(scene)),
       audits_(batch),
       dt_(scene.time.dt),
@@ -83,6 +87,8 @@ int Simulation::last_cg_iterations(int b) const { return backend_->cg_iterations
 void Simulation::set_parameters(int b, const PhysicalParameters& p) {
   if (p.planes.size() != params_[b].planes.size())
     throw std::logic_error("the number of ground planes is part of the graph and cannot change");
+  if (p.region_youngs.size() != params_[b].region_youngs.size())
+    throw std::logic_error("the number of material regions is part of the graph and cannot change");
   if (const std::string inside = initial_penetration(grid_, p); !inside.empty()) throw SimulationError("step 0: " + inside);
   params_[b] = p;
   reset();
@@ -366,10 +372,21 @@ double Simulation::kinetic_energy(int b) const {
   return 0.5 * params_[b].density * e;
 }
 
+std::vector<double> Simulation::cell_youngs(int b) const {
+  const PhysicalParameters& p = params_[b];
+  const ops::PartContext<double> cx{grid_.h, grid_.cell_count, grid_.node_count, 0, 0, 0};
+  const double gradient[3] = {p.stiffness_gradient[0], p.stiffness_gradient[1], p.stiffness_gradient[2]};
+  std::vector<double> E(grid_.cell_count);
+  for (int c = 0; c < grid_.cell_count; ++c)
+    ops::stiffness_field_cell(c, cx, &p.youngs_modulus, graph_.region_youngs >= 0 ? p.region_youngs.data() : nullptr,
+                              graph_.stiffness_gradient >= 0 ? gradient : nullptr, grid_.cell_region.data(),
+                              grid_.cell_offset.data(), E.data());
+  return E;
+}
+
 Simulation::CellScan Simulation::scan_cells(int b) const {
   const double* u = displacement(b);
-  double lambda, mu;
-  ops::lame_from_young(params_[b].youngs_modulus, params_[b].poisson_ratio, lambda, mu);
+  const std::vector<double> E = cell_youngs(b);
   double e = 0;
   int inverted = 0;
 #pragma omp parallel for schedule(static) reduction(+ : e, inverted) if (grid_.cell_count >= kCellParallelThreshold)
@@ -380,6 +397,8 @@ Simulation::CellScan Simulation::scan_cells(int b) const {
     inverted += ssc::det(F) <= 0;
     Mat3<double> R;
     ops::polar_rotation(F, R);
+    double lambda, mu;
+    ops::lame_from_young(E[c], params_[b].poisson_ratio, lambda, mu);
     e += ops::corotated_energy(R, grid_.cell_volume_weights.data() + 8 * c, lambda, mu, grid_.h, uc);
   }
   return {e, inverted};

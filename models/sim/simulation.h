@@ -21,6 +21,9 @@ struct PhysicalParameters {
   Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();
   Eigen::Vector3d angular_velocity = Eigen::Vector3d::Zero();
   std::vector<PlaneSpec> planes;
+  std::vector<double> region_youngs;  // material.regions[k].youngs_modulus, Pa
+  Eigen::Vector3d stiffness_gradient = Eigen::Vector3d::Zero();  // 1/m
+  double air_drag = 0;  // kg/m^3
 
   static PhysicalParameters from_scene(const Scene& scene);
 };
@@ -81,6 +84,8 @@ class Simulation {
     int inverted = 0;
   };
   CellScan scan_cells(int b) const;
+  // Each cell's Young's modulus (ops/stiffness_field.h; youngs_modulus for a homogeneous body).
+  std::vector<double> cell_youngs(int b) const;
   double gravitational_energy(int b) const;  // -m g . x, zero at the origin
   double contact_energy(int b) const;        // the soft-min penalty's potential (ops/contact.h)
   int inverted_cell_count(int b) const;      // cells with det F <= 0 at their centre

@@ -1,9 +1,20 @@
 // Builds the forward graph of one timestep (see timestep_graph.h).
 #include "models/sim/timestep_graph.h"
 
+#include "models/sim/scene.h"
+
 namespace ssc {
 
-TimestepGraph build_timestep_graph(int plane_count, bool extension, bool friction) {
+TimestepModel timestep_model(const Scene& scene) {
+  TimestepModel m;
+  m.friction = models_friction(scene);
+  m.region_count = int(scene.material.regions.size());
+  m.stiffness_gradient = scene.material.stiffness_gradient_key;
+  m.air_drag = scene.air_drag_key;
+  return m;
+}
+
+TimestepGraph build_timestep_graph(int plane_count, bool extension, const TimestepModel& model) {
   TimestepGraph t;
   Graph& g = t.graph;
   using D = Domain;
@@ -18,7 +29,7 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, bool frictio
   t.theta = g.add_input("theta", D::Scalar, 1);
   if (plane_count > 0) t.ground_planes = g.add_input("ground_planes", D::Scalar, 6 * plane_count);
   g.set_plane_count(plane_count);
-  friction = friction && plane_count > 0;
+  const bool friction = model.friction && plane_count > 0;
   const int friction_values = friction ? g.add_input("friction", D::Scalar, 2 * plane_count) : -1;
   t.fixed = g.add_input("fixed", D::Node, 1);
   t.u_prev = g.add_state("u_prev", D::Node, 3);
@@ -27,12 +38,27 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, bool frictio
   auto P = [](const char* slot, int tensor) { return OpArg{slot, tensor, A::Pointwise}; };
   auto G = [](const char* slot, int tensor) { return OpArg{slot, tensor, A::Gather}; };
 
-  g.add_op("lame", {P("youngs_modulus", t.youngs_modulus), P("poisson_ratio", t.poisson_ratio)},
-           {{"lambda", "lambda", D::Scalar, 1}, {"mu", "mu", D::Scalar, 1}});
-  t.lambda = g.find_tensor("lambda");
-  t.mu = g.find_tensor("mu");
+  // node_mass first, so that the cell ops from the Lame parameters to the corotation force
+  // fuse into one kernel.
   g.add_op("node_mass", {P("density", t.density)}, {{"mass", "mass", D::Node, 1}});
   t.mass = g.find_tensor("mass");
+  std::vector<OpArg> lame_inputs = {P("youngs_modulus", t.youngs_modulus), P("poisson_ratio", t.poisson_ratio)};
+  if (model.heterogeneous()) {
+    std::vector<OpArg> field_inputs = {P("youngs_modulus", t.youngs_modulus)};
+    if (model.region_count > 0) {
+      t.region_youngs = g.add_input("region_youngs", D::Scalar, model.region_count);
+      field_inputs.push_back(P("region_youngs", t.region_youngs));
+    }
+    if (model.stiffness_gradient) {
+      t.stiffness_gradient = g.add_input("stiffness_gradient", D::Scalar, 3);
+      field_inputs.push_back(P("stiffness_gradient", t.stiffness_gradient));
+    }
+    g.add_op("stiffness_field", field_inputs, {{"cell_youngs", "cell_youngs", D::Cell, 1}});
+    lame_inputs.push_back(P("cell_youngs", g.find_tensor("cell_youngs")));
+  }
+  g.add_op("lame", lame_inputs, {{"lambda", "lambda", D::Cell, 1}, {"mu", "mu", D::Cell, 1}});
+  t.lambda = g.find_tensor("lambda");
+  t.mu = g.find_tensor("mu");
   g.add_op("corotation", {G("u_prev", t.u_prev)},
            {{"rotation", "rotation", D::Cell, 9}, {"polar_status", "polar_status", D::Cell, 1}});
   t.rotation = g.find_tensor("rotation");
@@ -55,7 +81,15 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, bool frictio
     }
     force_inputs.push_back(G("point_force", point_force));
   }
-  const int damping = g.find_tensor("friction_damping");
+  int damping = g.find_tensor("friction_damping");
+  if (model.air_drag) {
+    t.air_drag = g.add_input("air_drag", D::Scalar, 1);
+    std::vector<OpArg> drag_inputs = {P("air_drag", t.air_drag), P("v_prev", t.v_prev), G("rotation", t.rotation)};
+    if (damping >= 0) drag_inputs.push_back(P("damping_in", damping));
+    g.add_op("air_drag", drag_inputs, {{"drag_force", "drag_force", D::Node, 3}, {"damping", "drag_damping", D::Node, 6}});
+    damping = g.find_tensor("drag_damping");
+    force_inputs.push_back(P("body_force", g.find_tensor("drag_force")));
+  }
   g.add_op("node_force", force_inputs, {{"force", "force", D::Node, 3}});
   g.add_op("stiffness_apply",
            {P("rotation", t.rotation), P("lambda", t.lambda), P("mu", t.mu), G("u_prev", t.u_prev)},

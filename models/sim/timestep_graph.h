@@ -10,13 +10,29 @@ struct TimestepGraph {
   // Inputs (per batch item): material, damping, gravity, time stepping, planes, fixed nodes.
   int youngs_modulus, poisson_ratio, density, mass_damping, stiffness_damping, gravity, dt, theta;
   int ground_planes = -1, fixed;
+  int region_youngs = -1, stiffness_gradient = -1;  // with the heterogeneous_stiffness extension
+  int air_drag = -1;                                // with the air_drag extension
   // State read by the step and its successors written by it.
   int u_prev, v_prev, band_guess = -1;
   int u, v, band_u = -1, rotation, mass, lambda, mu, cg_iterations;
 };
 
-// plane_count > 0 adds the contact force, friction (with planes) Coulomb friction at the
-// contact points (ops/friction.h); extension adds the band solve.
-TimestepGraph build_timestep_graph(int plane_count, bool extension, bool friction = false);
+struct Scene;
+
+// The model extensions a graph holds (docs/scene-format.md names them).
+struct TimestepModel {
+  bool friction = false;        // Coulomb friction at the contact points (ops/friction.h), with planes
+  int region_count = 0;         // material regions, each with its Young's modulus (ops/stiffness_field.h)
+  bool stiffness_gradient = false;  // E(x) = E exp(g . (x - c)) (ops/stiffness_field.h)
+  bool air_drag = false;        // quadratic drag on the surface (ops/air_drag.h)
+
+  bool heterogeneous() const { return region_count > 0 || stiffness_gradient; }
+};
+// The extensions a scene models.
+TimestepModel timestep_model(const Scene& scene);
+
+// plane_count > 0 adds the contact force; extension adds the band solve; model the
+// extensions.
+TimestepGraph build_timestep_graph(int plane_count, bool extension, const TimestepModel& model = {});
 
 }  // namespace ssc

@@ -37,7 +37,7 @@ int run_kernels(const KernelsOptions& o) {
   out.manifest()["scene"] = {{"file", o.scene}, {"resolved", scene.resolved}};
   out.manifest()["arch"] = o.arch;
   out.manifest()["real"] = o.real;
-  const TimestepGraph t = build_timestep_graph(int(scene.planes.size()), o.extension, models_friction(scene));
+  const TimestepGraph t = build_timestep_graph(int(scene.planes.size()), o.extension, timestep_model(scene));
   const KernelPlan plan = plan_kernels(t.graph);
   fs::create_directories(fs::path(out.file("kernels")));
   write_text_file(out.file("graph.txt"), t.graph.describe());
