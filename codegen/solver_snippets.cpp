@@ -131,8 +131,11 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   std::vector<Snippet> s;
   if (!adjoint) {
     Builder b(g, op, "newmark_init", Extent::Node);
-    b.t("u", true).t("u_prev").t("v_prev").t("fixed").t("dt").stage("u = u- + dt v- (initial guess)");
-    s.push_back(b.code("gen::newmark_init<Real>(i, $dt, $u_prev, $v_prev, $fixed, $u);\n"));
+    b.t("u", true).t("u_prev").t("v_prev").t("fixed").t("dt").stage("u = the guess or u- + dt v- (initial guess)");
+    const bool guess = g.ops().at(op).bound("guess");
+    if (guess) b.t("guess");
+    s.push_back(b.code(std::string("gen::newmark_init<Real>(i, $dt, $u_prev, $v_prev, $fixed, ") +
+                       (guess ? "$guess" : "nullptr") + ", $u);\n"));
   }
   {
     Builder b(g, op, "newmark_diag", Extent::Len);

@@ -14,7 +14,8 @@
 // at most at the speed where mu |w| / s = tan(slope): eps r / sqrt(1 - r^2).
 //
 // The op takes the contact op's point forces and returns them with friction added, so that
-// node_force gathers one point force; its second output is C per node.
+// node_force gathers one point force (without them, friction's own: the implicit contact op
+// adds its forces later); its second output is C per node.
 #pragma once
 #include "ops/contact.h"
 #include "ops/newmark.h"
@@ -107,7 +108,7 @@ SSC_HD inline void friction_point(int i, const PartContext<Real>& cx, const int*
   const int plane_count = load_ground_planes(ground_planes, cx.n_plane, planes);
   Vec3<Real> x, v;
   contact_point_state(i, point_nodes, point_t, node_rest, u_prev, v_prev, x, v);
-  Vec3<Real> f = load3(contact_force, i);
+  Vec3<Real> f = contact_force ? load3(contact_force, i) : zero3<Real>();
   Real C[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
   for (int k = 0; k < plane_count; ++k)
     plane_friction(planes[k], friction[kFrictionValues * k], friction[kFrictionValues * k + 1], point_area[i], x, v, f, C);
@@ -142,7 +143,7 @@ SSC_HD inline void adj_friction_point(int i, const PartContext<Real>& cx, const 
   Vec3<Real> x, v, xb = zero3<Real>(), vb = zero3<Real>();
   contact_point_state(i, point_nodes, point_t, node_rest, u_prev, v_prev, x, v);
   const Vec3<Real> f_bar = load3(point_force_bar, i);
-  add3(contact_force_bar, i, f_bar);
+  if (contact_force_bar) add3(contact_force_bar, i, f_bar);
   const Real t = point_t[i];
   const int na = point_nodes[2 * i], nb = point_nodes[2 * i + 1];
   Real C_bar[6];
@@ -174,7 +175,7 @@ inline OpSpec friction_spec() {
   s.name = "friction";
   s.domain = Domain::Point;
   s.slots = {in("u_prev", Access::Gather), in("v_prev", Access::Gather), in("ground_planes"), in("friction"),
-             in("contact_force"), out("point_force"), out("damping")};
+             optional_in("contact_force"), out("point_force"), out("damping")};
   s.scratch = {{"pdamp", Domain::Point, 6},
                {"xbar", Domain::Point, 3},
                {"vbar", Domain::Point, 3},

@@ -277,7 +277,8 @@ inline OpSpec newmark_rhs_spec() {
 // (a_m M + a_k R K R^T + C) u = rhs on the free nodes: the engine's Jacobi-PCG schedule
 // "newmark_pcg" (runtime/solvers.cpp, codegen/solver_snippets.cpp); its adjoint solves the
 // same system for the cotangent, w = A^-1 u_bar into the scratch buffer w, and the adjoint
-// parts hand the parameters -w^T dA/dp u.
+// parts hand the parameters -w^T dA/dp u. An optional guess (not differentiated: the solution
+// does not depend on it) starts the CG iterations instead of u- + dt v-.
 inline OpSpec newmark_solve_spec() {
   OpSpec s;
   s.name = "newmark_solve";
@@ -286,7 +287,8 @@ inline OpSpec newmark_solve_spec() {
   s.slots = {in("rotation", Access::Opaque), in("lambda", Access::Opaque), in("mu", Access::Opaque),
              in("mass", Access::Opaque), in("rhs", Access::Opaque),
              constant_in("u_prev", Access::Opaque), constant_in("v_prev", Access::Opaque),
-             constant_in("fixed", Access::Opaque), optional_in("damping", Access::Opaque), constant_in("dt"),
+             constant_in("fixed", Access::Opaque), optional_in("damping", Access::Opaque),
+             SlotSpec{"guess", false, Access::Opaque, true, false}, constant_in("dt"),
              constant_in("theta"), in("mass_damping"), in("stiffness_damping"), out("u"), out("cg_iterations")};
   s.slots.back().differentiable = false;
   s.scratch = {{"w", Domain::Node, 3}, {"ku", Domain::Cell, 24}, {"red", Domain::Node, 2}};

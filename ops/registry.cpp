@@ -4,6 +4,7 @@
 #include "graph/part_loop.h"
 #include "ops/air_drag.h"
 #include "ops/contact.h"
+#include "ops/contact_implicit.h"
 #include "ops/corotation.h"
 #include "ops/elasticity.h"
 #include "ops/extension.h"
@@ -22,6 +23,8 @@ const std::vector<OpSpec>& op_registry() {
       ops::corotation_spec(),
       ops::corotation_force_spec(),
       ops::contact_force_spec(),
+      ops::step_iterate_spec(),
+      ops::contact_implicit_spec(),
       ops::friction_spec(),
       ops::air_drag_spec(),
       ops::node_force_spec(),

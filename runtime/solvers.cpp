@@ -112,8 +112,9 @@ void newmark_forward(Interpreter<Real>& in, const OpNode& op, int b) {
   const NewmarkSystem<Real> system = newmark_system(in, a);
   const Real *u_prev = a.value("u_prev"), *v_prev = a.value("v_prev"), *fixed = a.value("fixed");
   Real* u = a.out("u");
+  const Real* guess = a.optional("guess");  // a nonlinear iteration's iterate
   for (int i = 0; i < 3 * g.node_count; ++i)
-    u[i] = fixed[i / 3] != Real(0) ? Real(0) : u_prev[i] + system.c.dt * v_prev[i];
+    u[i] = fixed[i / 3] != Real(0) ? Real(0) : guess ? guess[i] : u_prev[i] + system.c.dt * v_prev[i];
   const SolverOptions& o = in.options();
   const PcgResult r = system.solve(a.value("rhs"), u, o.cg_tolerance, o.cg_max_iterations);
   in.mutable_report().cg_iterations[b] = r.iterations;

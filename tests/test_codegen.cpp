@@ -66,13 +66,14 @@ TEST(CodegenPlan, TorusSnapshot) {
 TEST(CodegenPlan, FusionAndCuts) {
   const TimestepGraph t = build_timestep_graph(1, true);
   const KernelPlan plan = plan_kernels(t.graph);
-  // The Lame parameters, the corotation and its offset force share the cell kernel (pointwise).
+  // The Lame parameters, the corotation, its offset force and K u- share the cell kernel.
   const PlannedKernel* corot = plan.find(false, "lame");
   ASSERT_NE(corot, nullptr);
-  ASSERT_EQ(corot->parts.size(), 3u);
+  ASSERT_EQ(corot->parts.size(), 4u);
   EXPECT_EQ(corot->parts[0].label, "lame");
   EXPECT_EQ(corot->parts[2].label, "corotation_force");
-  EXPECT_EQ(corot->name.rfind("fwd_cell_lame_corotation_corotation_force__", 0), 0u) << corot->name;
+  EXPECT_EQ(corot->parts[3].label, "stiffness_apply");
+  EXPECT_EQ(corot->name.rfind("fwd_cell_lame_corotation_corotation_force_etc__", 0), 0u) << corot->name;
   // The solve is a solver sequence, each stage its own kernel.
   for (const char* label : {"newmark_apply_cell", "newmark_apply_node", "pcg_start", "pcg_iterate", "extension_apply"})
     EXPECT_NE(plan.find(false, label), nullptr) << label;
@@ -137,8 +138,11 @@ std::vector<KernelSource> example_kernel_sources(const std::string& real) {
   TimestepModel every;  // every extension
   every.friction = every.stiffness_gradient = every.air_drag = true;
   every.region_count = 2;
+  TimestepModel iterating = every;  // and the step's nonlinear iterations
+  iterating.implicit_contact = iterating.updated_corotation = true;
+  iterating.nonlinear_iterations = 2;
   for (const Variant& v : {Variant{1, true, {}}, Variant{0, false, {}}, Variant{1, false, {}},
-                           Variant{2, true, TimestepModel{true}}, Variant{2, true, every}}) {
+                           Variant{2, true, TimestepModel{true}}, Variant{2, true, every}, Variant{2, true, iterating}}) {
     const TimestepGraph t = build_timestep_graph(v.planes, v.extension, v.model);
     const KernelPlan plan = plan_kernels(t.graph);
     for (const PlannedKernel* k : plan.unique_kernels())

@@ -460,5 +460,15 @@ TEST(GpuAdjoint, FrictionTrajectoryGradientMatchesInterpreter) {
   trajectory_gradient_matches_interpreter({"ground.friction=0.4"}, " with friction");
 }
 
+TEST(GpuAdjoint, ExtensionsTrajectoryGradientMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  trajectory_gradient_matches_interpreter(
+      {"ground.friction=0.4", "air_drag=20", "material.stiffness_gradient=[1.5,-0.5,0.8]",
+       R"(material.regions=[{"normal":[1,0,0],"offset":0,"youngs_modulus":9000}])", "solver.contact=\"implicit\"",
+       "solver.corotation=\"updated\"", "solver.nonlinear_iterations=2"},
+      " with every extension, implicit contact and updated rotation");
+}
+
 }  // namespace
 }  // namespace ssc

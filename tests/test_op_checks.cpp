@@ -1,7 +1,9 @@
 // The gradient checks every registered op gets without a test of its own (graph/op_spec.h):
 // each op of the registry, at the inputs a real timestep gives it (a spinning sphere sliding
-// with friction into a tilted ground, with the displacement extension, so that every op is in
-// the graph and contact is active), is checked in double for
+// with friction into a tilted ground, with the displacement extension and every model
+// extension, so that every op is in the graph and contact is active; the ops of the step's
+// nonlinear iterations in the same scene with implicit contact and updated corotation), is
+// checked in double for
 //   - the dot-product test: its forward parts instantiated with Dual<double> (forward mode,
 //     exact) against its adjoint parts, <y_bar, J x_dot> = <J^T y_bar, x_dot>;
 //   - central finite differences of its forward against its adjoint;
@@ -39,7 +41,8 @@ namespace {
 using json = nlohmann::json;
 using D = Dual<double>;
 
-json check_scene() {
+// variant 1: the step's nonlinear iterations (implicit contact, updated corotation).
+json check_scene(int variant = 0) {
   json j;
   j["object"] = {{"primitive", "sphere"}, {"radius", 0.3}, {"position", {0.05, 0.33, -0.03}}};
   j["grid"] = {{"cell_size", 0.1}, {"band_width", 2}};
@@ -56,6 +59,11 @@ json check_scene() {
                    {{"height", -0.35}, {"normal", {1, 0.2, 0}}, {"stiffness", 1e5}, {"friction", 0.2}}}}};
   j["time"] = {{"dt", 0.01}, {"steps", 4}, {"theta", 0.6}};
   j["solver"] = {{"tolerance", 1e-13}, {"max_iterations", 5000}, {"extension_tolerance", 1e-13}};
+  if (variant == 1) {
+    j["solver"]["contact"] = "implicit";
+    j["solver"]["corotation"] = "updated";
+    j["solver"]["nonlinear_iterations"] = 2;
+  }
   return j;
 }
 
@@ -67,17 +75,17 @@ struct CheckedStep {
 
 // The sphere after four steps (in contact), with the step recomputed so that every tensor
 // holds the values of one consistent step.
-CheckedStep& setup() {
-  static CheckedStep s = [] {
-    CheckedStep x;
-    x.scene = parse_scene(check_scene(), "op_checks.json");
+CheckedStep& setup(int variant = 0) {
+  static CheckedStep s[2];
+  if (!s[variant].sim) {
+    CheckedStep& x = s[variant];
+    x.scene = parse_scene(check_scene(variant), "op_checks.json");
     x.grid = build_body_grid(x.scene);
     x.sim = std::make_unique<Simulation>(x.scene, x.grid, 1, true);
     for (int n = 0; n < 4; ++n) x.sim->step();
     x.sim->recompute_step();
-    return x;
-  }();
-  return s;
+  }
+  return s[variant];
 }
 
 struct Slot {
@@ -171,28 +179,52 @@ std::string part_labels(const OpSpec& s, bool adjoint) {
 constexpr double kDotLimit = 1e-10, kFdLimit = 1e-6, kFloatLimit = 2e-3;
 
 TEST(OpChecks, EveryRegisteredOpIsInTheCheckedGraph) {
-  CheckedStep& s = setup();
   std::set<std::string> used;
-  for (const OpNode& op : s.sim->timestep_graph().graph.ops()) used.insert(op.name());
+  for (int variant : {0, 1})
+    for (const OpNode& op : setup(variant).sim->timestep_graph().graph.ops()) used.insert(op.name());
+  CheckedStep& s = setup();
   for (const OpSpec& spec : op_registry())
     EXPECT_TRUE(used.count(spec.name)) << "op " << spec.name
                                        << " is registered but the checked timestep graph does not use it";
   EXPECT_GT(s.grid.contact_points.size(), 0u);
 }
 
+// A kept step's adjoint runs after later steps have overwritten the forward's scratch buffers
+// (they are not tensors): an adjoint part may read a scratch buffer only after an adjoint
+// part (or the solver's adjoint) has written it.
+TEST(OpChecks, NoAdjointReadsTheForwardsScratch) {
+  for (const OpSpec& spec : op_registry()) {
+    std::set<std::string> written;
+    if (!spec.solver.empty()) written.insert("w");  // the adjoint solve's solution
+    for (const PartSpec& p : spec.adjoint)
+      for (const PartArg& a : p.args) {
+        if (a.kind != PartArg::Kind::Scratch) continue;
+        if (a.write && !p.function.name.empty()) {
+          written.insert(a.name);
+          continue;
+        }
+        EXPECT_TRUE(written.count(a.name)) << spec.name << ": adjoint part " << p.label << " reads scratch $" << a.name
+                                           << " before an adjoint part writes it";
+      }
+  }
+}
+
 TEST(OpChecks, EveryPartOfEveryOpAgainstDualNumbersFiniteDifferencesAndFloat) {
-  CheckedStep& s = setup();
+  std::mt19937_64 rng(20261124);
+  std::normal_distribution<double> normal;
+  std::vector<CheckRow> rows;
+  std::set<std::string> checked;  // each op once, in the first graph that has it
+  for (int variant : {0, 1}) {
+  CheckedStep& s = setup(variant);
   const Graph& g = s.sim->timestep_graph().graph;
   Interpreter<double>& in = s.sim->interpreter();
   SolverOptions loose = in.options();
   loose.cg_tolerance = 1e-6;
   loose.extension_tolerance = 1e-6;
   Interpreter<float> fl(g, s.grid, 1, loose);
-  std::mt19937_64 rng(20261124);
-  std::normal_distribution<double> normal;
-  std::vector<CheckRow> rows;
   for (int o = 0; o < int(g.ops().size()); ++o) {
     const OpNode& op = g.ops()[o];
+    if (!checked.insert(op.name()).second) continue;
     CheckRow row{op.name(), part_labels(*op.spec, false), part_labels(*op.spec, true)};
     const std::vector<Slot> inputs = differentiable(g, op, false), outputs = differentiable(g, op, true);
     // Directions scaled to each input's size, cotangents to each output's.
@@ -288,6 +320,7 @@ TEST(OpChecks, EveryPartOfEveryOpAgainstDualNumbersFiniteDifferencesAndFloat) {
       EXPECT_LT(row.float_adj, kFloatLimit) << op.name() << " adjoint, float vs double";
     }
     rows.push_back(row);
+  }
   }
   auto cell = [](double v) { return v < 0 ? std::string("      -") : fmt::format("{:8.1e}", v); };
   std::printf("\nop checks (relative errors; limits: dot %.0e, FD %.0e, float %.0e)\n", kDotLimit, kFdLimit, kFloatLimit);

@@ -83,7 +83,9 @@ bool apply_parameter_override(nlohmann::json& config, const std::string& given, 
   try {
     row = parameter_row(name);
   } catch (const InputError&) {
-    if (!plane_name) return false;
+    // Scene keys that are not parameters (ground.stiffness) are left to the scene parser; a
+    // plane of a list ("ground.planes[1].x") has no other spelling.
+    if (!plane_name || name.find("planes[") == std::string::npos) return false;
     throw InputError(fmt::format("{}: --set {}: the plane parameters are ground.planes[k].height, .polar_deg, "
                                  ".azimuth_deg, .friction and .friction_velocity", file, given));
   }

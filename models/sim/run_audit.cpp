@@ -52,8 +52,10 @@ void SimulationAudit::check(const Simulation& sim, int b, int step, const char* 
           "{} {}: the simulation gained energy (batch item {}): the total energy rose from {:.4g} J to {:.4g} J "
           "(kinetic {:.4g}, elastic {:.4g}, contact {:.4g}, gravitational {:.4g} J), more than solver.energy_tolerance "
           "= {:g} of the run's energy scale {:.4g} J. Nothing in the model adds energy: time.dt is too large for the "
-          "ground contact (lower time.dt, ground.stiffness or ground.softmin_alpha) or for a fast spin (each cell's "
-          "rotation lags one step, which stores spurious elastic energy growing with (omega dt)^2: lower time.dt)",
+          "ground contact (set solver.contact to \"implicit\", which holds stiff grounds; with it, raise "
+          "solver.nonlinear_iterations or lower time.dt; or lower ground.stiffness or ground.softmin_alpha) or for a "
+          "fast spin (the cells' rotation stores spurious elastic energy growing with (omega dt)^2: lower time.dt, or "
+          "set solver.corotation to \"updated\")",
           when, step, b, energy_start, total, kinetic, elastic, contact, gravity, tolerance, energy_scale));
   }
   if (cells.inverted > 0 && first_inverted_step < 0) first_inverted_step = step;

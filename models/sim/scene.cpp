@@ -277,6 +277,18 @@ Scene parse_scene(const nlohmann::json& config, const std::string& file) {
     v.require(s.solver.max_iterations > 0, "max_iterations", "must be positive");
     s.solver.extension_tolerance = v.positive("extension_tolerance", v.number("extension_tolerance", s.solver.extension_tolerance));
     s.solver.energy_tolerance = v.non_negative("energy_tolerance", v.number("energy_tolerance", s.solver.energy_tolerance));
+    const std::string contact = v.string("contact", "linearized");
+    v.require(contact == "linearized" || contact == "implicit", "contact",
+              "must be \"linearized\" (the paper's prediction from the start of the step) or \"implicit\" (Newton "
+              "iterations within the step; for stiff grounds)");
+    s.solver.implicit_contact = contact == "implicit";
+    const std::string corotation = v.string("corotation", "lagged");
+    v.require(corotation == "lagged" || corotation == "updated", "corotation",
+              "must be \"lagged\" (the previous step's rotation) or \"updated\" (the rotation of the iterate)");
+    s.solver.updated_corotation = corotation == "updated";
+    s.solver.nonlinear_iterations = v.integer("nonlinear_iterations", s.solver.nonlinear_iterations);
+    v.require(s.solver.nonlinear_iterations >= 1 && s.solver.nonlinear_iterations <= 50, "nonlinear_iterations",
+              "must be between 1 and 50");
     v.reject_unknown_keys();
   }
   if (r.has("extensions")) read_extensions(r.child("extensions"), s);

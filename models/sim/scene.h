@@ -74,6 +74,12 @@ struct SolverSpec {
   int max_iterations = 2000;
   double extension_tolerance = 1e-8;
   double energy_tolerance = 0.05;  // energy audit (models/sim/run_audit.h); 0 turns it off
+  // The step's nonlinear iterations (ops/contact_implicit.h): contact "linearized" (the
+  // paper's) or "implicit" (Newton within the step); corotation "lagged" (the previous step's
+  // rotation, the paper's) or "updated" (from the iterate); solves per step when iterating.
+  bool implicit_contact = false;
+  bool updated_corotation = false;
+  int nonlinear_iterations = 4;
 };
 
 struct Scene {

@@ -11,6 +11,9 @@ TimestepModel timestep_model(const Scene& scene) {
   m.region_count = int(scene.material.regions.size());
   m.stiffness_gradient = scene.material.stiffness_gradient_key;
   m.air_drag = scene.air_drag_key;
+  m.implicit_contact = scene.solver.implicit_contact;
+  m.updated_corotation = scene.solver.updated_corotation;
+  m.nonlinear_iterations = scene.solver.nonlinear_iterations;
   return m;
 }
 
@@ -62,53 +65,116 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
   g.add_op("corotation", {G("u_prev", t.u_prev)},
            {{"rotation", "rotation", D::Cell, 9}, {"polar_status", "polar_status", D::Cell, 1}});
   t.rotation = g.find_tensor("rotation");
-  g.add_op("corotation_force", {P("rotation", t.rotation), P("lambda", t.lambda), P("mu", t.mu)},
-           {{"corner_force", "corotation_force", D::Cell, 24}});
-  std::vector<OpArg> force_inputs = {G("corner_force", g.find_tensor("corotation_force")), P("mass", t.mass),
-                                     P("gravity", t.gravity)};
-  if (plane_count > 0) {
+  // The elastic terms of the start-of-step rotation (one cell kernel with the ops above); an
+  // updated rotation has its own in each iteration.
+  if (!model.updated_corotation) {
+    g.add_op("corotation_force", {P("rotation", t.rotation), P("lambda", t.lambda), P("mu", t.mu)},
+             {{"corner_force", "corotation_force", D::Cell, 24}});
+    g.add_op("stiffness_apply", {P("rotation", t.rotation), P("lambda", t.lambda), P("mu", t.mu), G("u_prev", t.u_prev)},
+             {{"ku_corner", "k_u_prev", D::Cell, 24}});
+  }
+
+  // Forces evaluated once, at the start of the step: the paper's contact (unless the contact
+  // is implicit), friction, air drag. Each passes on the node-local matrix C it adds to
+  // (damping) and the forces it adds to (point forces, node forces).
+  const bool implicit_contact = model.implicit_contact && plane_count > 0;
+  int point_force = -1, damping = -1, body_force = -1;
+  if (plane_count > 0 && !implicit_contact) {
     g.add_op("contact_force",
              {G("u_prev", t.u_prev), G("v_prev", t.v_prev), P("ground_planes", t.ground_planes), P("dt", t.dt),
               P("theta", t.theta)},
              {{"point_force", "contact_force", D::Point, 3}});
-    int point_force = g.find_tensor("contact_force");
-    if (friction) {
-      g.add_op("friction",
-               {G("u_prev", t.u_prev), G("v_prev", t.v_prev), P("ground_planes", t.ground_planes),
-                P("friction", friction_values), P("contact_force", point_force)},
-               {{"point_force", "contact_friction_force", D::Point, 3}, {"damping", "friction_damping", D::Node, 6}});
-      point_force = g.find_tensor("contact_friction_force");
-    }
-    force_inputs.push_back(G("point_force", point_force));
+    point_force = g.find_tensor("contact_force");
   }
-  int damping = g.find_tensor("friction_damping");
+  if (friction) {
+    std::vector<OpArg> in = {G("u_prev", t.u_prev), G("v_prev", t.v_prev), P("ground_planes", t.ground_planes),
+                             P("friction", friction_values)};
+    if (point_force >= 0) in.push_back(P("contact_force", point_force));
+    g.add_op("friction", in,
+             {{"point_force", "contact_friction_force", D::Point, 3}, {"damping", "friction_damping", D::Node, 6}});
+    point_force = g.find_tensor("contact_friction_force");
+    damping = g.find_tensor("friction_damping");
+  }
   if (model.air_drag) {
     t.air_drag = g.add_input("air_drag", D::Scalar, 1);
-    std::vector<OpArg> drag_inputs = {P("air_drag", t.air_drag), P("v_prev", t.v_prev), G("rotation", t.rotation)};
-    if (damping >= 0) drag_inputs.push_back(P("damping_in", damping));
-    g.add_op("air_drag", drag_inputs, {{"drag_force", "drag_force", D::Node, 3}, {"damping", "drag_damping", D::Node, 6}});
+    std::vector<OpArg> in = {P("air_drag", t.air_drag), P("v_prev", t.v_prev), G("rotation", t.rotation)};
+    if (damping >= 0) in.push_back(P("damping_in", damping));
+    g.add_op("air_drag", in, {{"drag_force", "drag_force", D::Node, 3}, {"damping", "drag_damping", D::Node, 6}});
     damping = g.find_tensor("drag_damping");
-    force_inputs.push_back(P("body_force", g.find_tensor("drag_force")));
+    body_force = g.find_tensor("drag_force");
   }
-  g.add_op("node_force", force_inputs, {{"force", "force", D::Node, 3}});
-  g.add_op("stiffness_apply",
-           {P("rotation", t.rotation), P("lambda", t.lambda), P("mu", t.mu), G("u_prev", t.u_prev)},
-           {{"ku_corner", "k_u_prev", D::Cell, 24}});
+
+  // The step's solve, repeated (ops/contact_implicit.h): iteration k evaluates the implicit
+  // contact at the iterate u_k (the first: the prediction u- + dt v-) and (solver.corotation =
+  // "updated") the rotation at its theta-point, and starts its CG iterations from u_k.
   const std::vector<OpArg> newmark_scalars = {P("dt", t.dt), P("theta", t.theta), P("mass_damping", t.mass_damping),
                                               P("stiffness_damping", t.stiffness_damping)};
-  std::vector<OpArg> rhs_inputs = {G("ku_corner", g.find_tensor("k_u_prev")), P("mass", t.mass), P("u_prev", t.u_prev),
-                                   P("v_prev", t.v_prev), P("force", g.find_tensor("force"))};
-  if (damping >= 0) rhs_inputs.push_back(P("damping", damping));
-  rhs_inputs.insert(rhs_inputs.end(), newmark_scalars.begin(), newmark_scalars.end());
-  g.add_op("newmark_rhs", rhs_inputs, {{"rhs", "rhs", D::Node, 3}});
-  std::vector<OpArg> solve_inputs = {OpArg{"rotation", t.rotation, A::Opaque}, P("lambda", t.lambda), P("mu", t.mu),
-                                     OpArg{"mass", t.mass, A::Opaque},         OpArg{"rhs", g.find_tensor("rhs"), A::Opaque},
-                                     OpArg{"u_prev", t.u_prev, A::Opaque},     OpArg{"v_prev", t.v_prev, A::Opaque},
-                                     OpArg{"fixed", t.fixed, A::Opaque}};
-  if (damping >= 0) solve_inputs.push_back(OpArg{"damping", damping, A::Opaque});
-  solve_inputs.insert(solve_inputs.end(), newmark_scalars.begin(), newmark_scalars.end());
-  g.add_op("newmark_solve", solve_inputs,
-           {{"u", "u", D::Node, 3}, {"cg_iterations", "cg_iterations", D::Scalar, 1}});
+  const bool iterating = implicit_contact || model.updated_corotation;
+  const int iterations = iterating ? std::max(1, model.nonlinear_iterations) : 1;
+  int rotation = t.rotation, iterate = -1;
+  int corner_force = g.find_tensor("corotation_force"), ku = g.find_tensor("k_u_prev");
+  for (int k = 0; k < iterations; ++k) {
+    const bool last = k == iterations - 1;
+    auto name = [k](const std::string& base) { return k == 0 ? base : base + "_it" + std::to_string(k); };
+    int guess = -1, u_theta = -1;
+    if (iterating) {
+      std::vector<OpArg> in = {P("u_prev", t.u_prev), P("v_prev", t.v_prev), P("dt", t.dt), P("theta", t.theta)};
+      if (iterate >= 0) in.push_back(P("u_iter", iterate));
+      g.add_op("step_iterate", in,
+               {{"guess", name("guess"), D::Node, 3}, {"u_theta", name("u_theta"), D::Node, 3}});
+      guess = g.find_tensor(name("guess"));
+      u_theta = g.find_tensor(name("u_theta"));
+    }
+    if (model.updated_corotation) {
+      g.add_op("corotation", {G("u_prev", u_theta)},
+               {{"rotation", "rotation_it" + std::to_string(k), D::Cell, 9},
+                {"polar_status", "polar_status_it" + std::to_string(k), D::Cell, 1}});
+      rotation = g.find_tensor("rotation_it" + std::to_string(k));
+    }
+    if (model.updated_corotation) {  // the elastic terms of the iterate's rotation
+      g.add_op("corotation_force", {P("rotation", rotation), P("lambda", t.lambda), P("mu", t.mu)},
+               {{"corner_force", name("corotation_force"), D::Cell, 24}});
+      g.add_op("stiffness_apply", {P("rotation", rotation), P("lambda", t.lambda), P("mu", t.mu), G("u_prev", t.u_prev)},
+               {{"ku_corner", name("k_u_prev"), D::Cell, 24}});
+      corner_force = g.find_tensor(name("corotation_force"));
+      ku = g.find_tensor(name("k_u_prev"));
+    }
+    int step_point_force = point_force, step_damping = damping, step_body_force = body_force;
+    if (implicit_contact) {
+      std::vector<OpArg> in = {G("guess", guess), P("u_prev", t.u_prev), P("v_prev", t.v_prev),
+                               P("ground_planes", t.ground_planes), P("dt", t.dt)};
+      if (point_force >= 0) in.push_back(P("point_force_in", point_force));
+      if (damping >= 0) in.push_back(P("damping_in", damping));
+      if (body_force >= 0) in.push_back(P("force_in", body_force));
+      g.add_op("contact_implicit", in,
+               {{"point_force", name("contact_force"), D::Point, 3},
+                {"damping", name("contact_damping"), D::Node, 6},
+                {"node_force", name("contact_node_force"), D::Node, 3}});
+      step_point_force = g.find_tensor(name("contact_force"));
+      step_damping = g.find_tensor(name("contact_damping"));
+      step_body_force = g.find_tensor(name("contact_node_force"));
+    }
+    std::vector<OpArg> force_inputs = {G("corner_force", corner_force), P("mass", t.mass), P("gravity", t.gravity)};
+    if (step_point_force >= 0) force_inputs.push_back(G("point_force", step_point_force));
+    if (step_body_force >= 0) force_inputs.push_back(P("body_force", step_body_force));
+    g.add_op("node_force", force_inputs, {{"force", name("force"), D::Node, 3}});
+    std::vector<OpArg> rhs_inputs = {G("ku_corner", ku), P("mass", t.mass), P("u_prev", t.u_prev),
+                                     P("v_prev", t.v_prev), P("force", g.find_tensor(name("force")))};
+    if (step_damping >= 0) rhs_inputs.push_back(P("damping", step_damping));
+    rhs_inputs.insert(rhs_inputs.end(), newmark_scalars.begin(), newmark_scalars.end());
+    g.add_op("newmark_rhs", rhs_inputs, {{"rhs", name("rhs"), D::Node, 3}});
+    std::vector<OpArg> solve_inputs = {OpArg{"rotation", rotation, A::Opaque},  P("lambda", t.lambda), P("mu", t.mu),
+                                       OpArg{"mass", t.mass, A::Opaque},        OpArg{"rhs", g.find_tensor(name("rhs")), A::Opaque},
+                                       OpArg{"u_prev", t.u_prev, A::Opaque},    OpArg{"v_prev", t.v_prev, A::Opaque},
+                                       OpArg{"fixed", t.fixed, A::Opaque}};
+    if (step_damping >= 0) solve_inputs.push_back(OpArg{"damping", step_damping, A::Opaque});
+    if (guess >= 0) solve_inputs.push_back(OpArg{"guess", guess, A::Opaque});
+    solve_inputs.insert(solve_inputs.end(), newmark_scalars.begin(), newmark_scalars.end());
+    const std::string u_name = last ? "u" : "u_it" + std::to_string(k + 1);
+    const std::string cg_name = last ? "cg_iterations" : "cg_iterations_it" + std::to_string(k + 1);
+    g.add_op("newmark_solve", solve_inputs, {{"u", u_name, D::Node, 3}, {"cg_iterations", cg_name, D::Scalar, 1}});
+    iterate = g.find_tensor(u_name);
+  }
   t.u = g.find_tensor("u");
   t.cg_iterations = g.find_tensor("cg_iterations");
   g.add_op("velocity_update",

@@ -25,6 +25,10 @@ struct TimestepModel {
   int region_count = 0;         // material regions, each with its Young's modulus (ops/stiffness_field.h)
   bool stiffness_gradient = false;  // E(x) = E exp(g . (x - c)) (ops/stiffness_field.h)
   bool air_drag = false;        // quadratic drag on the surface (ops/air_drag.h)
+  // The step's nonlinear iterations (ops/contact_implicit.h): implicit contact (Newton on the
+  // penalty force), the rotation updated within the step, and how many solves a step takes.
+  bool implicit_contact = false, updated_corotation = false;
+  int nonlinear_iterations = 4;
 
   bool heterogeneous() const { return region_count > 0 || stiffness_gradient; }
 };
