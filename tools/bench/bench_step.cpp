@@ -1,5 +1,6 @@
-// Per-step benchmarks for the torus, the dragon and a teddy-sized body (and the torus with
-// every model extension on, "torus-extensions", for what they cost): forward and
+// Per-step benchmarks for the torus, the dragon and a teddy-sized body (and, for what they
+// cost, the torus with every model extension on, "torus-extensions", with implicit contact,
+// "torus-implicit", and with the rotation updated in the step, "torus-updated"): forward and
 // forward+adjoint steps on the CPU interpreter; on the GPU (when one is usable) the
 // generated forward step, the generated adjoint step, and a whole 10-step J_SSC
 // gradient evaluation per step (host cost and copies included), single
@@ -32,6 +33,12 @@ Body& body(const std::string& name) {
     b = std::make_unique<Body>();
     if (name == "teddy")
       b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/teddy-sized.json");
+    else if (name == "torus-implicit")
+      b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/torus.json",
+                            {"grid.band_width=0", "solver.contact=\"implicit\""});
+    else if (name == "torus-updated")
+      b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/torus.json",
+                            {"grid.band_width=0", "solver.corotation=\"updated\""});
     else if (name == "torus-extensions")
       b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/torus.json",
                             {"grid.band_width=0", "ground.friction=0.4", "air_drag=1.2",
@@ -196,12 +203,14 @@ void register_all() {
                                  std::string("double"))
         ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
   }
-  const std::string ext = "torus-extensions";  // friction, two stiffness fields, air drag
-  benchmark::RegisterBenchmark(("CpuForwardStep/" + ext).c_str(), BM_CpuForwardStep, ext)->Arg(1)->Unit(benchmark::kMillisecond);
-  benchmark::RegisterBenchmark(("GpuForwardStep/" + ext + "/double").c_str(), BM_GpuForwardStep, ext, std::string("double"))
-      ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
-  benchmark::RegisterBenchmark(("GpuAdjointStep/" + ext + "/double").c_str(), BM_GpuAdjointStep, ext, std::string("double"))
-      ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
+  // torus-extensions: friction, two stiffness fields, air drag
+  for (const std::string ext : {"torus-extensions", "torus-implicit", "torus-updated"}) {
+    benchmark::RegisterBenchmark(("CpuForwardStep/" + ext).c_str(), BM_CpuForwardStep, ext)->Arg(1)->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(("GpuForwardStep/" + ext + "/double").c_str(), BM_GpuForwardStep, ext, std::string("double"))
+        ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
+    benchmark::RegisterBenchmark(("GpuAdjointStep/" + ext + "/double").c_str(), BM_GpuAdjointStep, ext, std::string("double"))
+        ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
+  }
 }
 
 }  // namespace
