@@ -137,9 +137,9 @@ std::vector<const PlannedKernel*> KernelPlan::unique_kernels() const {
   return out;
 }
 
-const PlannedKernel* KernelPlan::find(bool adjoint_plan, const std::string& label) const {
+const PlannedKernel* KernelPlan::find(bool adjoint_plan, const std::string& label, int op) const {
   for (const PlannedKernel& k : adjoint_plan ? adjoint : forward)
-    if (k.label() == label) return &k;
+    if (k.label() == label && (op < 0 || k.parts.front().op == op)) return &k;
   return nullptr;
 }
 

@@ -44,7 +44,8 @@ struct KernelPlan {
   // Distinct kernels (forward then adjoint), each once.
   std::vector<const PlannedKernel*> unique_kernels() const;
   // First forward (adjoint) kernel whose first part has this label; nullptr if none.
-  const PlannedKernel* find(bool adjoint, const std::string& label) const;
+  // The first kernel with this label; of op `op` where op >= 0 (a graph may solve twice).
+  const PlannedKernel* find(bool adjoint, const std::string& label, int op = -1) const;
   // Readable listing; sanitize_hashes replaces every __<hash8> by __########.
   std::string text(const Graph& g, bool sanitize_hashes = false) const;
 };

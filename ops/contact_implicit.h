@@ -28,33 +28,39 @@
 namespace ssc {
 namespace ops {
 
-// ---- the step_iterate op: the iterate u_k and its theta-point ----
+// ---- the step_iterate op: the iterate u_k, its theta-point and its offset from the prediction ----
 
-// u_iter given: guess = u_iter, theta-point theta u_iter + (1 - theta) u-; else the prediction
-// guess = u- + dt v- and theta-point u- + theta dt v-.
+// u_iter given: guess = u_iter, theta-point theta u_iter + (1 - theta) u-, offset
+// u_iter - (u- + dt v-); else the prediction guess = u- + dt v-, theta-point u- + theta dt v-
+// and offset 0 (exactly: no rounding of a difference that vanishes).
 template <class Real>
 SSC_HD inline void step_iterate_node(int i, const PartContext<Real>&, const Real* u_iter, const Real* u_prev,
                                      const Real* v_prev, const Real* dt, const Real* theta, Real* guess,
-                                     Real* u_theta) {
+                                     Real* u_theta, Real* offset) {
   const Vec3<Real> up = load3(u_prev, i), vp = load3(v_prev, i);
   if (u_iter) {
     const Vec3<Real> u = load3(u_iter, i);
     store3(guess, i, u);
     store3(u_theta, i, theta[0] * u + (Real(1) - theta[0]) * up);
+    store3(offset, i, u - up - dt[0] * vp);
   } else {
     store3(guess, i, up + dt[0] * vp);
     store3(u_theta, i, up + (theta[0] * dt[0]) * vp);
+    store3(offset, i, zero3<Real>());
   }
 }
 
 template <class Real>
 SSC_HD inline void adj_step_iterate_node(int i, const PartContext<Real>&, const Real* u_iter, const Real* dt,
                                          const Real* theta, const Real* guess_bar, const Real* u_theta_bar,
-                                         Real* u_iter_bar, Real* u_prev_bar, Real* v_prev_bar) {
+                                         const Real* offset_bar, Real* u_iter_bar, Real* u_prev_bar,
+                                         Real* v_prev_bar) {
   const Vec3<Real> gb = load3(guess_bar, i), tb = load3(u_theta_bar, i);
   if (u_iter) {
-    add3(u_iter_bar, i, gb + theta[0] * tb);
-    add3(u_prev_bar, i, (Real(1) - theta[0]) * tb);
+    const Vec3<Real> ob = load3(offset_bar, i);
+    add3(u_iter_bar, i, gb + theta[0] * tb + ob);
+    add3(u_prev_bar, i, (Real(1) - theta[0]) * tb - ob);
+    add3(v_prev_bar, i, (-dt[0]) * ob);
   } else {
     add3(u_prev_bar, i, gb + tb);
     add3(v_prev_bar, i, dt[0] * gb + (theta[0] * dt[0]) * tb);
@@ -138,14 +144,14 @@ SSC_HD inline void contact_implicit_point_stiffness(int i, const PartContext<Rea
   for (int j = 0; j < 6; ++j) point_stiffness[6 * i + j] = K[j];
 }
 
-// Node i: C += dt K_i and the force K_i (u_k - u- - dt v-) (added to force_in, air drag's,
-// where given), K_i the (1 - t, t)-weighted sum of its points' K.
+// Node i: C += dt K_i and the force K_i (u_k - u- - dt v-) (the iterate's offset; added to
+// force_in, air drag's, where given), K_i the (1 - t, t)-weighted sum of its points' K.
 template <class Real>
 SSC_HD inline void contact_implicit_node(int i, const PartContext<Real>&, const Real* point_stiffness,
                                          const Real* point_t, const int* node_point_offset,
-                                         const int* node_point_entry, const Real* guess, const Real* u_prev,
-                                         const Real* v_prev, const Real* dt, const Real* damping_in,
-                                         const Real* force_in, Real* damping, Real* node_force) {
+                                         const int* node_point_entry, const Real* offset, const Real* dt,
+                                         const Real* damping_in, const Real* force_in, Real* damping,
+                                         Real* node_force) {
   Real K[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
   for (int k = node_point_offset[i]; k < node_point_offset[i + 1]; ++k) {
     const int p = node_point_entry[k] >> 1;
@@ -153,21 +159,18 @@ SSC_HD inline void contact_implicit_node(int i, const PartContext<Real>&, const 
     for (int j = 0; j < 6; ++j) K[j] += w * point_stiffness[6 * p + j];
   }
   for (int j = 0; j < 6; ++j) damping[6 * i + j] = (damping_in ? damping_in[6 * i + j] : Real(0)) + dt[0] * K[j];
-  const Vec3<Real> r = load3(guess, i) - load3(u_prev, i) - dt[0] * load3(v_prev, i);
-  const Vec3<Real> f = sym3_apply(K, 0, r);
+  const Vec3<Real> f = sym3_apply(K, 0, load3(offset, i));
   store3(node_force, i, force_in ? load3(force_in, i) + f : f);
 }
 
-// Node i's cotangents: K_bar (point_stiffness's at the node, 6; the points gather them), the
-// iterate's and the state's.
+// Node i's cotangents: K_bar (point_stiffness's at the node, 6; the points gather them) and
+// the offset's.
 template <class Real>
 SSC_HD inline void adj_contact_implicit_node(int i, const PartContext<Real>&, const Real* point_stiffness,
                                              const Real* point_t, const int* node_point_offset,
-                                             const int* node_point_entry, const Real* guess, const Real* u_prev,
-                                             const Real* v_prev, const Real* dt, const Real* damping_bar,
-                                             const Real* node_force_bar, Real* K_bar,
-                                             Real* guess_bar, Real* u_prev_bar, Real* v_prev_bar,
-                                             Real* damping_in_bar, Real* force_in_bar) {
+                                             const int* node_point_entry, const Real* offset, const Real* dt,
+                                             const Real* damping_bar, const Real* node_force_bar, Real* K_bar,
+                                             Real* offset_bar, Real* damping_in_bar, Real* force_in_bar) {
   Real K[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
   for (int k = node_point_offset[i]; k < node_point_offset[i + 1]; ++k) {
     const int p = node_point_entry[k] >> 1;
@@ -175,13 +178,9 @@ SSC_HD inline void adj_contact_implicit_node(int i, const PartContext<Real>&, co
     for (int j = 0; j < 6; ++j) K[j] += w * point_stiffness[6 * p + j];
   }
   const Vec3<Real> fb = load3(node_force_bar, i);
-  const Vec3<Real> r = load3(guess, i) - load3(u_prev, i) - dt[0] * load3(v_prev, i);
   for (int j = 0; j < 6; ++j) K_bar[6 * i + j] = dt[0] * damping_bar[6 * i + j];
-  adj_sym3_apply(K_bar, i, r, fb);
-  const Vec3<Real> rb = sym3_apply(K, 0, fb);
-  add3(guess_bar, i, rb);
-  add3(u_prev_bar, i, Real(-1) * rb);
-  add3(v_prev_bar, i, (-dt[0]) * rb);
+  adj_sym3_apply(K_bar, i, load3(offset, i), fb);
+  add3(offset_bar, i, sym3_apply(K, 0, fb));
   if (damping_in_bar)
     for (int j = 0; j < 6; ++j) damping_in_bar[6 * i + j] += damping_bar[6 * i + j];
   if (force_in_bar) add3(force_in_bar, i, fb);
@@ -225,11 +224,11 @@ inline OpSpec step_iterate_spec() {
   s.name = "step_iterate";
   s.domain = Domain::Node;
   s.slots = {optional_in("u_iter"), in("u_prev"), in("v_prev"), constant_in("dt"), constant_in("theta"), out("guess"),
-             out("u_theta")};
+             out("u_theta"), out("offset")};
   s.forward = {part("step_iterate", Extent::Node, SSC_PART(step_iterate_node),
-                    {"u_iter", "u_prev", "v_prev", "dt", "theta", "guess", "u_theta"})};
+                    {"u_iter", "u_prev", "v_prev", "dt", "theta", "guess", "u_theta", "offset"})};
   s.adjoint = {part("step_iterate", Extent::Node, SSC_ADJOINT_PART(adj_step_iterate_node),
-                    {"u_iter", "dt", "theta", "d_guess", "d_u_theta", "d_u_iter", "d_u_prev", "d_v_prev"})};
+                    {"u_iter", "dt", "theta", "d_guess", "d_u_theta", "d_offset", "d_u_iter", "d_u_prev", "d_v_prev"})};
   return s;
 }
 
@@ -238,8 +237,8 @@ inline OpSpec contact_implicit_spec() {
   s.name = "contact_implicit";
   s.domain = Domain::Point;
   // Node tensors read by the node parts of this point op are gathers for the planner.
-  s.slots = {in("guess", Access::Gather), in("u_prev", Access::Gather), in("v_prev", Access::Gather),
-             in("ground_planes"), optional_in("point_force_in"), optional_in("damping_in", Access::Gather),
+  s.slots = {in("guess", Access::Gather), in("offset", Access::Gather), in("ground_planes"),
+             optional_in("point_force_in"), optional_in("damping_in", Access::Gather),
              optional_in("force_in", Access::Gather), constant_in("dt"), out("point_force"), out("damping"),
              out("node_force")};
   s.scratch = {{"pstiff", Domain::Point, 6},
@@ -250,14 +249,13 @@ inline OpSpec contact_implicit_spec() {
                     {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "guess^", "ground_planes",
                      "point_force_in", "point_force", "$pstiff"}),
                part("contact_implicit_nodes", Extent::Node, SSC_PART(contact_implicit_node),
-                    {"$pstiff^", "#point_t", "#node_point_offset", "#node_point_entry", "guess", "u_prev", "v_prev",
-                     "dt", "damping_in", "force_in", "damping", "node_force"})};
+                    {"$pstiff^", "#point_t", "#node_point_offset", "#node_point_entry", "offset", "dt", "damping_in",
+                     "force_in", "damping", "node_force"})};
   s.adjoint = {part("contact_implicit_stiffness", Extent::Point, SSC_ADJOINT_PART(contact_implicit_point_stiffness),
                     {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "guess^", "ground_planes", "$pstiff"}),
                part("contact_implicit_nodes", Extent::Node, SSC_ADJOINT_PART(adj_contact_implicit_node),
-                    {"$pstiff^", "#point_t", "#node_point_offset", "#node_point_entry", "guess", "u_prev", "v_prev",
-                     "dt", "d_damping", "d_node_force", "$kbar", "d_guess", "d_u_prev", "d_v_prev", "d_damping_in",
-                     "d_force_in"}),
+                    {"$pstiff^", "#point_t", "#node_point_offset", "#node_point_entry", "offset", "dt", "d_damping",
+                     "d_node_force", "$kbar", "d_offset", "d_damping_in", "d_force_in"}),
                part("contact_implicit", Extent::Point, SSC_ADJOINT_PART(adj_contact_implicit_point),
                     {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "guess^", "ground_planes", "$kbar^",
                      "d_point_force", "d_point_force_in", "$xbar", "$planebar"}),

@@ -460,8 +460,8 @@ void GpuTimestep::Impl::close_segment() {
   replaying = false;
 }
 
-const PlannedKernel& GpuTimestep::Impl::kernel(const std::string& label, bool adjoint) const {
-  const PlannedKernel* k = plan.find(adjoint, label);
+const PlannedKernel& GpuTimestep::Impl::kernel(const std::string& label, bool adjoint, int op) const {
+  const PlannedKernel* k = plan.find(adjoint, label, op);
   if (!k) throw std::logic_error("gpu: the plan has no kernel " + label);
   return *k;
 }

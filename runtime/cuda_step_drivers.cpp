@@ -26,9 +26,9 @@ std::string scratch_of(const char* key, int op) { return fmt::format("s_{}_op{}"
 
 }  // namespace
 
-GpuTimestep::Impl::Apply GpuTimestep::Impl::newmark_apply() {
-  const PlannedKernel& cell = kernel("newmark_apply_cell");
-  const PlannedKernel& node = kernel("newmark_apply_node");
+GpuTimestep::Impl::Apply GpuTimestep::Impl::newmark_apply(int o) {
+  const PlannedKernel& cell = kernel("newmark_apply_cell", false, o);
+  const PlannedKernel& node = kernel("newmark_apply_node", false, o);
   return [this, &cell, &node](cu::DevicePtr p, cu::DevicePtr q, int gate) {
     Call a;
     a.vectors = {{"v_p", p}, {"v_q", q}};
@@ -48,29 +48,29 @@ GpuTimestep::Impl::Apply GpuTimestep::Impl::extension_apply() {
   };
 }
 
-// Jacobi diagonal and the masked right-hand side of the time-step system into v_inv_diag and
-// v_b; x is zeroed on fixed nodes (everywhere with zero_x).
-void GpuTimestep::Impl::newmark_setup(cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x) {
+// Jacobi diagonal and the masked right-hand side of op o's time-step system into v_inv_diag
+// and v_b; x is zeroed on fixed nodes (everywhere with zero_x).
+void GpuTimestep::Impl::newmark_setup(int o, cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x) {
   Call diag;
   diag.len = 8L * sizes.cell;
-  launch(kernel("newmark_diag"), diag);
+  launch(kernel("newmark_diag", false, o), diag);
   Call setup;
   setup.vectors = {{"v_rhs", rhs}, {"v_x", x}, {"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
   setup.values = {{"zero_x", zero_x ? 1 : 0}};
-  launch(kernel("newmark_setup"), setup);
+  launch(kernel("newmark_setup", false, o), setup);
 }
 
 void GpuTimestep::Impl::newmark(int o) {
   const OpNode& op = graph.ops()[o];
   const cu::DevicePtr u = tensors.at(op.output("u")).ptr, rhs = tensors.at(op.input("rhs")).ptr;
-  launch(kernel("newmark_init"));
-  newmark_setup(rhs, u, false);
+  launch(kernel("newmark_init", false, o));
+  newmark_setup(o, rhs, u, false);
   if (grid_solves) {
-    grid_pcg(kernel("newmark_pcg_grid"), u, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
+    grid_pcg(kernel("newmark_pcg_grid", false, o), u, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
              solver.cg_max_iterations, tensors.at(op.output("cg_iterations")).ptr, "time-step solve", &cg_iterations);
     return;
   }
-  cg_iterations = pcg(u, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(),
+  cg_iterations = pcg(u, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(o),
                       "time-step solve", fmt::format("newmark {}", o));
   write_iterations(op.output("cg_iterations"), cg_iterations);
 }
@@ -129,14 +129,14 @@ void GpuTimestep::Impl::run() {
 void GpuTimestep::Impl::adjoint_newmark(int o) {
   const OpNode& op = graph.ops()[o];
   const cu::DevicePtr w = scratch.at(scratch_of("w", o)).ptr;
-  newmark_setup(adjoints.at(op.output("u")).ptr, w, true);
+  newmark_setup(o, adjoints.at(op.output("u")).ptr, w, true);
   if (grid_solves) {
-    grid_pcg(kernel("newmark_pcg_grid"), w, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
+    grid_pcg(kernel("newmark_pcg_grid", false, o), w, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
              solver.cg_max_iterations, scratch.at("v_iterations_sink").ptr, "adjoint time-step solve",
              &adjoint_cg_iterations);
     return;
   }
-  adjoint_cg_iterations = pcg(w, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(),
+  adjoint_cg_iterations = pcg(w, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(o),
                               "adjoint time-step solve", fmt::format("adjoint newmark {}", o));
 }
 

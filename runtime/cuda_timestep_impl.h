@@ -136,7 +136,8 @@ struct GpuTimestep::Impl {
   void open_segment(const std::string& tag);
   bool recording() const { return !replaying; }
   void close_segment();
-  const PlannedKernel& kernel(const std::string& label, bool adjoint = false) const;
+  // The kernel with this label (of op `op` where op >= 0: each solve binds its own tensors).
+  const PlannedKernel& kernel(const std::string& label, bool adjoint = false, int op = -1) const;
   std::vector<double> solver_state() const;
   std::vector<int> pcg(cu::DevicePtr x, long len, double tol, int max_it, const Apply& apply, const char* what,
                        const std::string& tag);
@@ -148,13 +149,13 @@ struct GpuTimestep::Impl {
   void write_iterations(int tensor, const std::vector<int>& iterations);
 
   // cuda_step_drivers.cpp: what a step launches
-  Apply newmark_apply();
+  Apply newmark_apply(int op);
   Apply extension_apply();
   void launch_plan(const PlannedKernel* begin, const PlannedKernel* end, const std::string& first_segment,
                    const std::function<void(int)>& solve, const char* what);
   void solve_forward(int op);
   void solve_adjoint(int op);
-  void newmark_setup(cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x);
+  void newmark_setup(int op, cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x);
   void newmark(int op);
   void extension(int op);
   void run();

@@ -213,7 +213,7 @@ TEST(OpChecks, EveryPartOfEveryOpAgainstDualNumbersFiniteDifferencesAndFloat) {
   std::mt19937_64 rng(20261124);
   std::normal_distribution<double> normal;
   std::vector<CheckRow> rows;
-  std::set<std::string> checked;  // each op once, in the first graph that has it
+  std::set<std::string> checked;  // each op and binding once, in the first graph that has it
   for (int variant : {0, 1}) {
   CheckedStep& s = setup(variant);
   const Graph& g = s.sim->timestep_graph().graph;
@@ -224,8 +224,11 @@ TEST(OpChecks, EveryPartOfEveryOpAgainstDualNumbersFiniteDifferencesAndFloat) {
   Interpreter<float> fl(g, s.grid, 1, loose);
   for (int o = 0; o < int(g.ops().size()); ++o) {
     const OpNode& op = g.ops()[o];
-    if (!checked.insert(op.name()).second) continue;
-    CheckRow row{op.name(), part_labels(*op.spec, false), part_labels(*op.spec, true)};
+    std::string binding = op.name();  // each op once per set of bound optional slots
+    for (const SlotSpec& slot : op.spec->slots)
+      if (slot.optional && op.bound(slot.name)) binding += " +" + slot.name;
+    if (!checked.insert(binding).second) continue;
+    CheckRow row{binding, part_labels(*op.spec, false), part_labels(*op.spec, true)};
     const std::vector<Slot> inputs = differentiable(g, op, false), outputs = differentiable(g, op, true);
     // Directions scaled to each input's size, cotangents to each output's.
     auto rms = [](const std::vector<double>& v) {
@@ -324,9 +327,9 @@ TEST(OpChecks, EveryPartOfEveryOpAgainstDualNumbersFiniteDifferencesAndFloat) {
   }
   auto cell = [](double v) { return v < 0 ? std::string("      -") : fmt::format("{:8.1e}", v); };
   std::printf("\nop checks (relative errors; limits: dot %.0e, FD %.0e, float %.0e)\n", kDotLimit, kFdLimit, kFloatLimit);
-  std::printf("%-17s %-9s %-9s %-9s %-9s  %s\n", "op", "dot", "FD", "float", "float adj", "parts (forward | adjoint)");
+  std::printf("%-54s %-9s %-9s %-9s %-9s  %s\n", "op (+ its bound optional inputs)", "dot", "FD", "float", "float adj", "parts (forward | adjoint)");
   for (const CheckRow& r : rows)
-    std::printf("%-17s %-9s %-9s %-9s %-9s  %s | %s\n", r.op.c_str(), cell(r.dot).c_str(), cell(r.fd).c_str(),
+    std::printf("%-54s %-9s %-9s %-9s %-9s  %s | %s\n", r.op.c_str(), cell(r.dot).c_str(), cell(r.fd).c_str(),
                 cell(r.float_out).c_str(), cell(r.float_adj).c_str(), r.forward_parts.c_str(), r.adjoint_parts.c_str());
 }
 

@@ -116,14 +116,16 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
   for (int k = 0; k < iterations; ++k) {
     const bool last = k == iterations - 1;
     auto name = [k](const std::string& base) { return k == 0 ? base : base + "_it" + std::to_string(k); };
-    int guess = -1, u_theta = -1;
+    int guess = -1, u_theta = -1, offset = -1;
     if (iterating) {
       std::vector<OpArg> in = {P("u_prev", t.u_prev), P("v_prev", t.v_prev), P("dt", t.dt), P("theta", t.theta)};
       if (iterate >= 0) in.push_back(P("u_iter", iterate));
       g.add_op("step_iterate", in,
-               {{"guess", name("guess"), D::Node, 3}, {"u_theta", name("u_theta"), D::Node, 3}});
+               {{"guess", name("guess"), D::Node, 3}, {"u_theta", name("u_theta"), D::Node, 3},
+                {"offset", name("offset"), D::Node, 3}});
       guess = g.find_tensor(name("guess"));
       u_theta = g.find_tensor(name("u_theta"));
+      offset = g.find_tensor(name("offset"));
     }
     if (model.updated_corotation) {
       g.add_op("corotation", {G("u_prev", u_theta)},
@@ -141,8 +143,8 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
     }
     int step_point_force = point_force, step_damping = damping, step_body_force = body_force;
     if (implicit_contact) {
-      std::vector<OpArg> in = {G("guess", guess), P("u_prev", t.u_prev), P("v_prev", t.v_prev),
-                               P("ground_planes", t.ground_planes), P("dt", t.dt)};
+      std::vector<OpArg> in = {G("guess", guess), P("offset", offset), P("ground_planes", t.ground_planes),
+                               P("dt", t.dt)};
       if (point_force >= 0) in.push_back(P("point_force_in", point_force));
       if (damping >= 0) in.push_back(P("damping_in", damping));
       if (body_force >= 0) in.push_back(P("force_in", body_force));
