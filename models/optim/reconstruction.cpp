@@ -127,6 +127,11 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
   for (size_t i = 0; i < result.names.size(); ++i) {
     result.nominal[i] = get_parameter(base, result.names[i]);
     axes.push_back(default_axis(result.names[i], result.nominal[i]));
+    if (axes.back().kind == ParameterAxis::Kind::Positive && !(result.nominal[i] > 0))
+      throw InputError(fmt::format("{}: --fit {}: its value in the scene is {:g}; the starts of a positive parameter are "
+                                   "drawn from 0.1 to 10 times it, so give the scene a nominal value above 0 (e.g. "
+                                   "--set {}=VALUE)",
+                                   problem.scene.file, result.names[i], result.nominal[i], result.names[i]));
     result.units.push_back(parameter_unit(result.names[i]));
   }
   const ParameterSpace space(axes);

@@ -29,7 +29,9 @@ DeformedSurface::DeformedSurface(const SimGrid& grid, int refinement) : grid_(gr
           for (int q = 0; q < 8; ++q)
             v += phi[q] * ((q & 1) ? a : 1 - a) * ((q & 2) ? b : 1 - b) * ((q & 4) ? c : 1 - c);
           const long n = fine.index(ci * s + x, cj * s + y, ck * s + z);
-          fine.phi[n] = v;
+          // A face on a grid plane (phi = 0 at its nodes, > 0 beyond) bounds no simulated cell
+          // from inside: moved 1e-6 cells inwards it is extracted from the body's cells.
+          fine.phi[n] = v + 1e-6 * coarse.cell_size;
           location.emplace(n, RefinedNode{e, a, b, c});
           if (x < s && y < s && z < s) fine_cells.push_back(n);
         }

@@ -10,6 +10,7 @@
 #include "tools/ssc/progress.h"
 #include "tools/ssc/run_checks.h"
 #include "models/io/output_dir.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 
@@ -41,12 +42,16 @@ Command register_observe(CLI::App& app) {
         },
         [&](const Simulation& sim) { report_inverted_cells(sim); });
     progress.finish();
-    write_observation_files(out.path(), set);
-    out.commit();
     size_t points = 0;
     for (int f = 0; f < set.frame_count; ++f)
       for (const DepthImage& img : set.frames[f])
         for (double d : img.depth) points += d > 0;
+    if (points == 0)  // nothing a reconstruction could use: nothing is written
+      throw InputError(fmt::format("{}: no camera sees the body in any frame (every depth pixel is empty); check "
+                                   "observation.cameras (eye, target, fov_deg) and max_depth",
+                                   o->scene));
+    write_observation_files(out.path(), set);
+    out.commit();
     std::printf("wrote %s: %d frames x %zu cameras, %zu depth measurements, noise %.3g m\n", o->out.c_str(),
                 set.frame_count, set.cameras.size(), points, spec.noise);
     return 0;
