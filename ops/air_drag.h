@@ -32,13 +32,7 @@ SSC_HD inline void corner_drag(Real rho, Real s, Vec3<Real> n, Vec3<Real> v, Vec
   const Real w = dot(v, n);
   if (!(w > Real(0)) || s == Real(0)) return;
   f += (-rho * s * w * w) * n;
-  const Real c = Real(2) * rho * s * w;
-  C[0] += c * n.x * n.x;
-  C[1] += c * n.y * n.y;
-  C[2] += c * n.z * n.z;
-  C[3] += c * n.x * n.y;
-  C[4] += c * n.x * n.z;
-  C[5] += c * n.y * n.z;
+  add_sym3_outer(C, Real(2) * rho * s * w, n);
 }
 
 // Adjoint of corner_drag for the cotangents f_bar and C_bar (of the 6 stored values); with
@@ -50,10 +44,7 @@ SSC_HD inline void adj_corner_drag(Real rho, Real s, Vec3<Real> n, Vec3<Real> v,
                                    Vec3<Real>& n_bar, Vec3<Real>& v_bar, Real& rho_bar) {
   const Real w = dot(v, n);
   if (!(w > Real(0)) || s == Real(0)) return;
-  const Real h = Real(0.5);
-  const Vec3<Real> Gn = make_vec3(C_bar[0] * n.x + h * C_bar[3] * n.y + h * C_bar[4] * n.z,
-                                  h * C_bar[3] * n.x + C_bar[1] * n.y + h * C_bar[5] * n.z,
-                                  h * C_bar[4] * n.x + h * C_bar[5] * n.y + C_bar[2] * n.z);
+  const Vec3<Real> Gn = sym3_cotangent_apply(C_bar, n);
   const Real nGn = dot(n, Gn), fn = dot(f_bar, n);
   const Real w_bar = Real(-2) * rho * s * w * fn + Real(2) * rho * s * nGn;
   n_bar += (-rho * s * w * w) * f_bar + (Real(4) * rho * s * w) * Gn + w_bar * v;

@@ -75,14 +75,7 @@ SSC_HD inline void plane_contact_stiffness(const GroundPlane<Real>& g, Real area
   const Real d = dot(g.normal, x) - g.height;
   const Real kA = g.stiffness * area;
   f += (-kA * softmin(d, g.alpha)) * g.normal;
-  const Real c = kA * softmin_derivative(d, g.alpha);
-  const Vec3<Real> n = g.normal;
-  K[0] += c * n.x * n.x;
-  K[1] += c * n.y * n.y;
-  K[2] += c * n.z * n.z;
-  K[3] += c * n.x * n.y;
-  K[4] += c * n.x * n.z;
-  K[5] += c * n.y * n.z;
+  add_sym3_outer(K, kA * softmin_derivative(d, g.alpha), g.normal);
 }
 
 // Adjoint of plane_contact_stiffness for f_bar and K_bar (of the 6 stored values).
@@ -95,10 +88,7 @@ SSC_HD inline void adj_plane_contact_stiffness(const GroundPlane<Real>& g, Real 
   const Real kA = g.stiffness * area;
   const Real s = softmin(d, g.alpha), s1 = softmin_derivative(d, g.alpha);
   const Real s2 = -g.alpha * s1 * (Real(1) - s1);
-  const Real h = Real(0.5);
-  const Vec3<Real> Gn = make_vec3(K_bar[0] * n.x + h * K_bar[3] * n.y + h * K_bar[4] * n.z,
-                                  h * K_bar[3] * n.x + K_bar[1] * n.y + h * K_bar[5] * n.z,
-                                  h * K_bar[4] * n.x + h * K_bar[5] * n.y + K_bar[2] * n.z);
+  const Vec3<Real> Gn = sym3_cotangent_apply(K_bar, n);
   const Real nGn = dot(n, Gn), fn = dot(f_bar, n);
   const Real d_bar = -kA * s1 * fn + kA * s2 * nGn;
   x_bar += d_bar * n;
@@ -152,12 +142,8 @@ SSC_HD inline void contact_implicit_node(int i, const PartContext<Real>&, const 
                                          const int* node_point_entry, const Real* offset, const Real* dt,
                                          const Real* damping_in, const Real* force_in, Real* damping,
                                          Real* node_force) {
-  Real K[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
-  for (int k = node_point_offset[i]; k < node_point_offset[i + 1]; ++k) {
-    const int p = node_point_entry[k] >> 1;
-    const Real w = (node_point_entry[k] & 1) ? point_t[p] : Real(1) - point_t[p];
-    for (int j = 0; j < 6; ++j) K[j] += w * point_stiffness[6 * p + j];
-  }
+  Real K[6];
+  gather_point_sym3(point_stiffness, point_t, node_point_offset, node_point_entry, i, K);
   for (int j = 0; j < 6; ++j) damping[6 * i + j] = (damping_in ? damping_in[6 * i + j] : Real(0)) + dt[0] * K[j];
   const Vec3<Real> f = sym3_apply(K, 0, load3(offset, i));
   store3(node_force, i, force_in ? load3(force_in, i) + f : f);
@@ -171,12 +157,8 @@ SSC_HD inline void adj_contact_implicit_node(int i, const PartContext<Real>&, co
                                              const int* node_point_entry, const Real* offset, const Real* dt,
                                              const Real* damping_bar, const Real* node_force_bar, Real* K_bar,
                                              Real* offset_bar, Real* damping_in_bar, Real* force_in_bar) {
-  Real K[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
-  for (int k = node_point_offset[i]; k < node_point_offset[i + 1]; ++k) {
-    const int p = node_point_entry[k] >> 1;
-    const Real w = (node_point_entry[k] & 1) ? point_t[p] : Real(1) - point_t[p];
-    for (int j = 0; j < 6; ++j) K[j] += w * point_stiffness[6 * p + j];
-  }
+  Real K[6];
+  gather_point_sym3(point_stiffness, point_t, node_point_offset, node_point_entry, i, K);
   const Vec3<Real> fb = load3(node_force_bar, i);
   for (int j = 0; j < 6; ++j) K_bar[6 * i + j] = dt[0] * damping_bar[6 * i + j];
   adj_sym3_apply(K_bar, i, load3(offset, i), fb);

@@ -66,13 +66,7 @@ SSC_HD inline void adj_plane_friction(const GroundPlane<Real>& g, Real mu, Real 
   const Real nv = dot(n, v);
   const Vec3<Real> w = v - nv * n;
   const Real s = sqrt(dot(w, w) + eps * eps);
-  const Real h = Real(0.5);
-  const Vec3<Real> Gw = make_vec3(C_bar[0] * w.x + h * C_bar[3] * w.y + h * C_bar[4] * w.z,
-                                  h * C_bar[3] * w.x + C_bar[1] * w.y + h * C_bar[5] * w.z,
-                                  h * C_bar[4] * w.x + h * C_bar[5] * w.y + C_bar[2] * w.z);
-  const Vec3<Real> Gn = make_vec3(C_bar[0] * n.x + h * C_bar[3] * n.y + h * C_bar[4] * n.z,
-                                  h * C_bar[3] * n.x + C_bar[1] * n.y + h * C_bar[5] * n.z,
-                                  h * C_bar[4] * n.x + h * C_bar[5] * n.y + C_bar[2] * n.z);
+  const Vec3<Real> Gw = sym3_cotangent_apply(C_bar, w), Gn = sym3_cotangent_apply(C_bar, n);
   const Real GP = C_bar[0] + C_bar[1] + C_bar[2] - dot(n, Gn);
   const Real wGw = dot(w, Gw), fw = dot(f_bar, w);
   const Real s2 = s * s, s3 = s2 * s;
@@ -120,13 +114,7 @@ SSC_HD inline void friction_point(int i, const PartContext<Real>& cx, const int*
 template <class Real>
 SSC_HD inline void friction_damping_node(int i, const PartContext<Real>&, const Real* point_damping, const Real* point_t,
                                          const int* node_point_offset, const int* node_point_entry, Real* damping) {
-  Real s[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
-  for (int k = node_point_offset[i]; k < node_point_offset[i + 1]; ++k) {
-    const int p = node_point_entry[k] >> 1;
-    const Real w = (node_point_entry[k] & 1) ? point_t[p] : Real(1) - point_t[p];
-    for (int j = 0; j < 6; ++j) s[j] += w * point_damping[6 * p + j];
-  }
-  for (int j = 0; j < 6; ++j) damping[6 * i + j] = s[j];
+  gather_point_sym3(point_damping, point_t, node_point_offset, node_point_entry, i, damping + 6 * i);
 }
 
 // The contact force's cotangent passes through; the point's position and velocity cotangents

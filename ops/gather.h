@@ -30,6 +30,18 @@ SSC_HD inline Vec3<Real> gather_point_sum(const Real* point_values, const Real* 
   return s;
 }
 
+// The same sum for a node-local symmetric matrix (6 values a point: xx yy zz xy xz yz).
+template <class Real>
+SSC_HD inline void gather_point_sym3(const Real* point_values, const Real* point_t, const int* offset, const int* entry,
+                                     int node, Real* s) {
+  for (int j = 0; j < 6; ++j) s[j] = Real(0);
+  for (int k = offset[node]; k < offset[node + 1]; ++k) {
+    const int p = entry[k] >> 1;
+    const Real w = (entry[k] & 1) ? point_t[p] : Real(1) - point_t[p];
+    for (int j = 0; j < 6; ++j) s[j] += w * point_values[6 * p + j];
+  }
+}
+
 // The 8 corner vectors of one cell from a nodal field.
 template <class Real>
 SSC_HD inline void load_cell_corners(const Real* nodal, const int* cell_nodes, int cell, Vec3<Real>* out) {

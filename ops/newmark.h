@@ -112,6 +112,27 @@ SSC_HD inline Vec3<Real> sym3_apply(const Real* s, int i, Vec3<Real> p) {
                    m[4] * p.x + m[5] * p.y + m[2] * p.z);
 }
 
+// S += c n n^T.
+template <class Real>
+SSC_HD inline void add_sym3_outer(Real* s, Real c, Vec3<Real> n) {
+  s[0] += c * n.x * n.x;
+  s[1] += c * n.y * n.y;
+  s[2] += c * n.z * n.z;
+  s[3] += c * n.x * n.y;
+  s[4] += c * n.x * n.z;
+  s[5] += c * n.y * n.z;
+}
+
+// G p for the cotangent s_bar of the 6 stored values of a symmetric S: G is the symmetric
+// matrix with <G, dS> = sum_k s_bar[k] dS[k] (its off-diagonal entries s_bar / 2).
+template <class Real>
+SSC_HD inline Vec3<Real> sym3_cotangent_apply(const Real* s_bar, Vec3<Real> p) {
+  const Real h = Real(0.5);
+  return make_vec3(s_bar[0] * p.x + h * s_bar[3] * p.y + h * s_bar[4] * p.z,
+                   h * s_bar[3] * p.x + s_bar[1] * p.y + h * s_bar[5] * p.z,
+                   h * s_bar[4] * p.x + h * s_bar[5] * p.y + s_bar[2] * p.z);
+}
+
 // The cotangent of the stored values of S for y = S p and the cotangent y_bar.
 template <class Real>
 SSC_HD inline void adj_sym3_apply(Real* s_bar, int i, Vec3<Real> p, Vec3<Real> y_bar) {

@@ -22,25 +22,13 @@
 #include <sstream>
 #include <string>
 
-#include "tests/ssc_binary.h"
+#include "tests/cli_test_folder.h"
 
 namespace ssc {
 namespace {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-json read_json(const fs::path& p) {
-  std::ifstream in(p);
-  return json::parse(in);
-}
 
 json camera(const json& eye, const json& target) {
   return {{"every", 8},
@@ -77,35 +65,9 @@ json bar_scene(double dt, int steps, double region_youngs, bool observation) {
   return j;
 }
 
-class ExtensionFit : public ::testing::Test {
+class ExtensionFit : public CliTestFolder {
  protected:
-  void SetUp() override {
-    const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    dir_ = fs::temp_directory_path() / ("ssc-extension-fit-" + std::to_string(getpid()) + "-" + test);
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    binary_ = ssc_binary_path();
-    ASSERT_TRUE(fs::exists(binary_)) << binary_;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);
-  }
-  std::string write(const std::string& name, const json& scene) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << scene.dump(2);
-    return p.string();
-  }
-  // One OpenMP thread unless OMP_NUM_THREADS says otherwise (see tests/test_friction_fit.cpp).
-  int run(const std::string& args, std::string* out, std::string* err) {
-    const fs::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
-    const std::string cmd = "OMP_NUM_THREADS=\"${OMP_NUM_THREADS:-1}\" '" + binary_ + "' " + args + " > '" + o.string() +
-                            "' 2> '" + e.string() + "'";
-    const int status = std::system(cmd.c_str());
-    *out = read_text(o);
-    *err = read_text(e);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
+  ExtensionFit() : CliTestFolder("ssc-extension-fit-") {}
   // Observes `data`, fits `name` on `fit`; returns result.json.
   json observe_and_fit(const json& data, const json& fit, const std::string& name, int starts, int iterations) {
     std::string out, err;
@@ -119,8 +81,6 @@ class ExtensionFit : public ::testing::Test {
     EXPECT_EQ(code, 0) << out << err;
     return code == 0 ? read_json(dir_ / "fit" / "result.json") : json();
   }
-  fs::path dir_;
-  std::string binary_;
 };
 
 TEST_F(ExtensionFit, AirDragFromAFinerSimulation) {

@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "tests/ssc_binary.h"
+#include "tests/cli_test_folder.h"
 
 namespace ssc {
 namespace {
@@ -27,18 +27,6 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 constexpr double kTrueMu = 0.3;
-
-std::string read_text(const fs::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-json read_json(const fs::path& p) {
-  std::ifstream in(p);
-  return json::parse(in);
-}
 
 // A 10 x 5 x 10 cm elastic box (E 100 kPa, 500 kg/m^3) launched at 1 m/s along +x on the level
 // plane y = 0 (k 1e6 Pa/m, soft-min 1000 /m), resting on it where the soft-min pressure about
@@ -72,38 +60,9 @@ json data_scene() { return box_scene(0.0125, 0.0025, 120, kTrueMu, true); }
 // The fit scene: cell 25 mm, dt 5 ms (the frames fall on every 4th step).
 json fit_scene(std::optional<double> friction) { return box_scene(0.025, 0.005, 60, friction, false); }
 
-class FrictionFit : public ::testing::Test {
+class FrictionFit : public CliTestFolder {
  protected:
-  void SetUp() override {
-    const std::string test = ::testing::UnitTest::GetInstance()->current_test_info()->name();
-    dir_ = fs::temp_directory_path() / ("ssc-friction-fit-" + std::to_string(getpid()) + "-" + test);
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    binary_ = ssc_binary_path();
-    ASSERT_TRUE(fs::exists(binary_)) << "the ssc binary is not next to the test binary: " << binary_;
-  }
-  void TearDown() override {
-    std::error_code ec;
-    if (!HasFailure()) fs::remove_all(dir_, ec);  // a failed test keeps its folder to look at
-  }
-  std::string write(const std::string& name, const json& scene) {
-    const fs::path p = dir_ / name;
-    std::ofstream(p) << scene.dump(2);
-    return p.string();
-  }
-  // Runs ssc with the arguments; returns the exit code, stdout in *out and stderr in *err. One
-  // OpenMP thread unless OMP_NUM_THREADS says otherwise: the engine's many small parallel regions
-  // slow down many times over on cores shared with other processes (the reconstruction below:
-  // 9 s on 2 idle cores, 15 s on one thread, up to 65 s on 2 threads at load 5).
-  int run(const std::string& args, std::string* out, std::string* err) {
-    const fs::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
-    const std::string cmd = "OMP_NUM_THREADS=\"${OMP_NUM_THREADS:-1}\" '" + binary_ + "' " + args + " > '" + o.string() +
-                            "' 2> '" + e.string() + "'";
-    const int status = std::system(cmd.c_str());
-    *out = read_text(o);
-    *err = read_text(e);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  }
+  FrictionFit() : CliTestFolder("ssc-friction-fit-") {}
   // Renders the data scene into dir_/obs.
   void observe() {
     std::string out, err;
@@ -113,14 +72,6 @@ class FrictionFit : public ::testing::Test {
     const json cams = read_json(dir_ / "obs" / "cameras.json");
     ASSERT_EQ(cams.at("frame_count").get<int>(), 16);
   }
-  std::vector<std::string> leftovers() const {
-    std::vector<std::string> found;
-    for (const auto& e : fs::directory_iterator(dir_))
-      if (e.path().filename().string().find(".ssc-tmp-") != std::string::npos) found.push_back(e.path().string());
-    return found;
-  }
-  fs::path dir_;
-  std::string binary_;
 };
 
 // Fitting ground.friction on a scene without a friction key must turn friction on and recover
