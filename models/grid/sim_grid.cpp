@@ -83,8 +83,8 @@ void integrate_cells(SimGrid& g, const GridOptions& opt) {
     for (int c = 0; c < 8; ++c) phi[c] = g.sdf.phi[idx[c]];
     const CutCellIntegrals r = integrate_cut_cell(phi, g.h, opt.integration_subdivisions);
     // A surface on a cell face (phi = 0 at its corners: faces on grid planes) is counted by
-    // the empty cell beyond it, which is not simulated; the surface weights take it inside
-    // (phi + 1e-6 h).
+    // the empty cell beyond it, which is not simulated; the surface weights and the area (the
+    // contact points' shares, the drag) take it inside (phi + 1e-6 h).
     bool on_face = false;
     std::array<double, 8> shifted;
     for (int c = 0; c < 8; ++c) {
@@ -105,7 +105,7 @@ void integrate_cells(SimGrid& g, const GridOptions& opt) {
     }
     for (int c = 0; c < 8; ++c) floored += r.volume[c] < floor;
     g.cell_volume[e] = r.volume_total;
-    g.cell_area[e] = r.area_total;
+    g.cell_area[e] = s.area_total;
   }
   g.floored_weights = floored;
 }
