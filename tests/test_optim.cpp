@@ -816,6 +816,42 @@ TEST(ReconstructionStarts, SeededAndRepeatable) {
   EXPECT_TRUE(bitwise_equal(given[1], o.initial_values[1]));
 }
 
+// A range given for a parameter (a plane's height_range in the scene) replaces its sampling:
+// uniform in [low, high], whatever the nominal value; the scene reads and checks the key, and
+// a list of planes inherits it.
+TEST(ReconstructionStarts, GivenRangesAreUniformAndComeFromThePlanesHeightRange) {
+  const ParameterSpace space({free_axis("ground.planes[1].height", 1.0), free_axis("ground.height", 1.0)});
+  const Vec nominal = vec({-3.0, 0.0});
+  ReconstructionOptions o;
+  o.starts = 500;
+  o.start_ranges["ground.planes[1].height"] = {-0.6, -0.2};
+  const std::vector<Vec> starts = sample_starts(space, nominal, o);
+  double lo = 1e300, hi = -1e300, lo0 = 1e300, hi0 = -1e300;
+  for (const Vec& x : starts) {
+    lo = std::min(lo, x[0]), hi = std::max(hi, x[0]);
+    lo0 = std::min(lo0, x[1]), hi0 = std::max(hi0, x[1]);
+  }
+  EXPECT_GE(lo, -0.6);
+  EXPECT_LE(hi, -0.2);
+  EXPECT_LT(lo, -0.59);
+  EXPECT_GT(hi, -0.21);
+  EXPECT_LT(lo0, -0.45) << "the other height keeps its spread of 0.5 m about its nominal value";
+  EXPECT_GT(hi0, 0.45);
+  nlohmann::json j = {{"object", {{"primitive", "sphere"}, {"radius", 0.1}}},
+                      {"grid", {{"cell_size", 0.05}}},
+                      {"ground", {{"height_range", {-0.1, 0.1}}, {"planes", {{{"height", 0.0}}, {{"height", -0.5}}}}}}};
+  const Scene scene = parse_scene(j, "ranges.json");
+  ASSERT_EQ(scene.planes.size(), 2u);
+  EXPECT_TRUE(scene.planes[1].height_range_key);
+  EXPECT_EQ(scene.planes[1].height_range.first, -0.1);
+  const auto ranges = scene_start_ranges(scene);  // what reconstruct adds to its options
+  ASSERT_EQ(ranges.size(), 2u);
+  EXPECT_EQ(ranges.at("ground.height").second, 0.1);
+  EXPECT_EQ(ranges.at("ground.planes[1].height").first, -0.1);
+  j["ground"]["planes"][1]["height_range"] = {0.2, 0.1};
+  expect_input_error([&] { parse_scene(j, "ranges.json"); }, {"ranges.json", "ground.planes[1].height_range", "low < high"});
+}
+
 TEST(ReconstructionStarts, PositiveParametersAreLogUniformInTheRange) {
   const ParameterSpace space({positive_axis("youngs_modulus"), positive_axis("density")});
   const Vec nominal = vec({5000, 100});

@@ -85,6 +85,14 @@ std::vector<bool> evaluate_batch(BatchSimulations& sims, const Problem& problem,
 
 }  // namespace
 
+std::map<std::string, std::pair<double, double>> scene_start_ranges(const Scene& scene) {
+  std::map<std::string, std::pair<double, double>> ranges;
+  for (size_t k = 0; k < scene.planes.size(); ++k)
+    if (scene.planes[k].height_range_key)
+      ranges[k == 0 ? "ground.height" : fmt::format("ground.planes[{}].height", k)] = scene.planes[k].height_range;
+  return ranges;
+}
+
 std::vector<Eigen::VectorXd> sample_starts(const ParameterSpace& space, const Eigen::VectorXd& nominal,
                                            const ReconstructionOptions& o) {
   if (!o.initial_values.empty()) return o.initial_values;
@@ -96,6 +104,10 @@ std::vector<Eigen::VectorXd> sample_starts(const ParameterSpace& space, const Ei
     for (int i = 0; i < space.size(); ++i) {
       const ParameterAxis& a = space.axes()[i];
       const double u = unit(rng);
+      if (const auto r = o.start_ranges.find(a.name); r != o.start_ranges.end()) {
+        x[i] = r->second.first + u * (r->second.second - r->second.first);
+        continue;
+      }
       switch (a.kind) {
         case ParameterAxis::Kind::Positive:
           x[i] = nominal[i] * std::exp(std::log(o.low) + u * (std::log(o.high) - std::log(o.low)));
@@ -135,7 +147,9 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
     result.units.push_back(parameter_unit(result.names[i]));
   }
   const ParameterSpace space(axes);
-  const std::vector<Eigen::VectorXd> initial = sample_starts(space, result.nominal, o);
+  ReconstructionOptions sampling = o;  // the scene's plane height ranges, unless given
+  for (const auto& [name, range] : scene_start_ranges(problem.scene)) sampling.start_ranges.emplace(name, range);
+  const std::vector<Eigen::VectorXd> initial = sample_starts(space, result.nominal, sampling);
   const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
   BatchSimulations sims(problem, o.device);
 

@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,9 @@ struct ReconstructionOptions {
   std::uint64_t seed = 1;
   double low = 0.1, high = 10.0;  // multiplicative range of positive parameters
   double spread = 0.5;            // relative range of free parameters
+  // Ranges [low, high] the starts of these parameters are drawn from uniformly instead (a
+  // plane's height_range in the scene, models/sim/scene.h).
+  std::map<std::string, std::pair<double, double>> start_ranges;
   std::vector<Eigen::VectorXd> initial_values;  // overrides the sampling when non-empty (one per start)
   bool finite_differences = false;  // central differences instead of the adjoint (for comparison)
   double fd_step = 1e-4;            // in the optimiser's internal coordinates (log space: 0.01 %)
@@ -66,6 +70,8 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
                                  const ReconstructionProgress& progress = {});
 
 // The sampled start values (physical), exposed for tests.
+// The start ranges a scene gives (its planes' height_range), by parameter name.
+std::map<std::string, std::pair<double, double>> scene_start_ranges(const Scene& scene);
 std::vector<Eigen::VectorXd> sample_starts(const ParameterSpace& space, const Eigen::VectorXd& nominal,
                                            const ReconstructionOptions& options);
 

@@ -92,6 +92,13 @@ PlaneSpec read_plane(const JsonReader& r, const PlaneSpec& defaults) {
   p.softmin_alpha = r.positive("softmin_alpha", r.number("softmin_alpha", p.softmin_alpha));
   p.friction = r.non_negative("friction", r.number("friction", p.friction));
   p.friction_velocity = r.positive("friction_velocity", r.number("friction_velocity", p.friction_velocity));
+  if (r.has("height_range")) {
+    const std::vector<double> range = r.numbers("height_range");
+    r.require(range.size() == 2 && range[0] < range[1], "height_range",
+              "must be [low, high] in metres with low < high (where reconstruct draws a fitted height's starts)");
+    p.height_range = {range[0], range[1]};
+    p.height_range_key = true;
+  }
   return p;
 }
 
@@ -99,7 +106,7 @@ void read_ground(const JsonReader& r, Scene& s) {
   if (!r.boolean("enabled", true)) {
     // A disabled ground may keep its settings; they are accepted and ignored.
     for (const char* key : {"height", "normal", "angles_deg", "stiffness", "softmin_alpha", "friction",
-                            "friction_velocity", "planes"})
+                            "friction_velocity", "height_range", "planes"})
       r.has(key);
     r.reject_unknown_keys();
     return;

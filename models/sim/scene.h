@@ -53,6 +53,9 @@ struct PlaneSpec {
   double softmin_alpha = 100;       // 1/m
   double friction = 0;              // Coulomb coefficient mu (ops/friction.h)
   double friction_velocity = 1e-3;  // m/s: the smoothing velocity eps below which friction is viscous
+  // Where `reconstruct` draws the starts of a fitted height from (uniformly), when given.
+  std::pair<double, double> height_range{0, 0};
+  bool height_range_key = false;
   // The normal's azimuth about +y in degrees. Derived from the normal, except for a vertical
   // normal, which has none: then this value is kept so that setting the azimuth before the
   // polar angle (as an optimiser may) is not lost.
