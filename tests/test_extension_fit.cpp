@@ -7,6 +7,8 @@
 //    dt 5 ms (one grid: trilinear cells lock in bending by a
 //    grid-dependent amount, tests/test_heterogeneous_stiffness.cpp, which a finer data grid
 //    would hand the fit as a stiffness bias).
+//  - a second plane's height: a sphere rolling into a wall, the data with 12.5 mm cells and dt
+//    2.5 ms, the fit with 25 mm and 5 ms, the starts from the scene's height_range.
 // Also: a positive parameter whose scene value is 0 cannot be fitted from starts around it
 // (exit 2 naming the file and the key). Figures are printed for docs/validation.md.
 #include <gtest/gtest.h>
@@ -65,6 +67,25 @@ json bar_scene(double dt, int steps, double region_youngs, bool observation) {
   return j;
 }
 
+// A sphere rolling along the floor at 2 m/s into a wall (the second plane, normal -x, at
+// x = -height); the fit's scene has the wall at 0.5 m and draws its starts from height_range.
+json wall_scene(double cell, double dt, int steps, double wall_height, bool observation) {
+  json j;
+  j["object"] = {{"primitive", "sphere"}, {"radius", 0.1}, {"position", {0, 0.1005, 0}}};
+  j["grid"] = {{"cell_size", cell}};
+  j["material"] = {{"youngs_modulus", 5e4}, {"poisson_ratio", 0.3}, {"density", 100}, {"mass_damping", 0.0},
+                   {"stiffness_damping", 0.002}};
+  j["initial"] = {{"linear_velocity", {2.0, 0, 0}}};
+  j["ground"] = {{"stiffness", 1e5},
+                 {"softmin_alpha", 1000},
+                 {"planes",
+                  {{{"height", 0.0}},
+                   {{"angles_deg", {90, 180}}, {"height", wall_height}, {"height_range", {-0.6, -0.2}}}}}};
+  j["time"] = {{"dt", dt}, {"steps", steps}, {"theta", 0.6}};
+  if (observation) j["observation"] = camera({0.2, 0.8, 1.4}, {0.1, 0.1, 0});
+  return j;
+}
+
 class ExtensionFit : public CliTestFolder {
  protected:
   ExtensionFit() : CliTestFolder("ssc-extension-fit-") {}
@@ -106,6 +127,23 @@ TEST_F(ExtensionFit, MaterialRegionFromASmallerTimeStep) {
               fitted, 100 * (fitted / truth - 1), r.at("cost").get<double>(), r.at("matched_points").get<int>(),
               r.at("observed_points").get<int>(), r.at("wall_seconds").get<double>());
   EXPECT_NEAR(fitted / truth, 1.0, 0.05);
+}
+
+TEST_F(ExtensionFit, SecondPlaneFromAFinerSimulation) {
+  const double truth = -0.3;  // the wall at x = 0.3 m
+  const json r = observe_and_fit(wall_scene(0.0125, 0.0025, 120, truth, true), wall_scene(0.025, 0.005, 60, -0.5, false),
+                                 "ground.planes[1].height", 2, 20);
+  ASSERT_FALSE(r.is_null());
+  const double fitted = r.at("parameters").at("ground.planes[1].height").get<double>();
+  for (const json& s : r.at("starts")) {
+    const double x0 = s.at("initial").at("ground.planes[1].height").get<double>();
+    EXPECT_GE(x0, -0.6);
+    EXPECT_LE(x0, -0.2);
+  }
+  std::printf("wall fit: true height %.3f m, fitted %.5f m (%+.2f mm), cost %.4g, %d of %d points matched, %.1f s\n",
+              truth, fitted, 1e3 * (fitted - truth), r.at("cost").get<double>(), r.at("matched_points").get<int>(),
+              r.at("observed_points").get<int>(), r.at("wall_seconds").get<double>());
+  EXPECT_NEAR(fitted, truth, 0.01);
 }
 
 TEST_F(ExtensionFit, APositiveParameterAtZeroIsAnInputError) {
