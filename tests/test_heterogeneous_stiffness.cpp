@@ -21,6 +21,8 @@
 #include "models/sim/body.h"
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
+#include "models/sim/timestep_graph.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 namespace {
@@ -140,6 +142,36 @@ TEST(HeterogeneousStiffness, TwoMaterialCantileverAgainstCalculix) {
     EXPECT_GT(u1[k].y() / c1, 0.80) << keys[k];
     EXPECT_LT(u1[k].y() / c1, 1.01) << keys[k];
   }
+}
+
+// Each switch of the scene's "extensions" section turns its extension off and keeps its keys
+// valid (they are still read and checked); an unknown name is an input error.
+TEST(ExtensionSwitches, EachTurnsItsExtensionOffKeepingItsKeys) {
+  json j;
+  j["object"] = {{"primitive", "sphere"}, {"radius", 0.1}, {"position", {0, 0.2, 0}}};
+  j["grid"] = {{"cell_size", 0.05}};
+  j["material"] = {{"regions", {{{"normal", {1, 0, 0}}, {"offset", 0.0}, {"youngs_modulus", 2e4}}}},
+                   {"stiffness_gradient", {1, 0, 0}}};
+  j["ground"] = {{"friction", 0.3}, {"planes", {{{"height", 0.0}}, {{"angles_deg", {90, 0}}, {"height", -1.0}}}}};
+  j["air_drag"] = 1.2;
+  const Scene on = parse_scene(j, "switches.json");
+  const TimestepModel all = timestep_model(on);
+  EXPECT_TRUE(all.friction && all.air_drag && all.stiffness_gradient);
+  EXPECT_EQ(all.region_count, 1);
+  EXPECT_EQ(on.planes.size(), 2u);
+  j["extensions"] = {{"friction", false}, {"heterogeneous_stiffness", false}, {"second_plane", false},
+                     {"air_drag", false}, {"nonlinear_material", false}};
+  const Scene off = parse_scene(j, "switches.json");
+  const TimestepModel none = timestep_model(off);
+  EXPECT_FALSE(none.friction || none.air_drag || none.stiffness_gradient || none.heterogeneous());
+  EXPECT_EQ(off.planes.size(), 1u);
+  EXPECT_EQ(off.extensions_off.size(), 5u);
+  j["extensions"] = {{"frition", false}};
+  EXPECT_THROW(parse_scene(j, "switches.json"), InputError);
+  j["extensions"] = json::object();
+  j["material"]["regions"][0]["youngs_modulus"] = -1;  // a switched-off extension's keys are still checked
+  j["extensions"]["heterogeneous_stiffness"] = false;
+  EXPECT_THROW(parse_scene(j, "switches.json"), InputError);
 }
 
 }  // namespace

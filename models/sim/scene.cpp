@@ -335,8 +335,4 @@ bool models_friction(const Scene& scene) {
   return false;
 }
 
-bool models_heterogeneous_stiffness(const Scene& scene) {
-  return !scene.material.regions.empty() || scene.material.stiffness_gradient_key;
-}
-
 }  // namespace ssc

@@ -119,7 +119,5 @@ Eigen::Vector3d normal_from_angles(double polar_deg, double azimuth_deg);
 
 // Whether the simulation models friction: a friction key in the scene, or a plane with mu > 0.
 bool models_friction(const Scene& scene);
-// Whether the body's stiffness varies: material regions or a stiffness gradient key.
-bool models_heterogeneous_stiffness(const Scene& scene);
 
 }  // namespace ssc
