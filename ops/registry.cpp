@@ -10,6 +10,7 @@
 #include "ops/extension.h"
 #include "ops/friction.h"
 #include "ops/newmark.h"
+#include "ops/neo_hookean.h"
 #include "ops/nodal.h"
 #include "ops/stiffness_field.h"
 
@@ -27,6 +28,8 @@ const std::vector<OpSpec>& op_registry() {
       ops::contact_implicit_spec(),
       ops::friction_spec(),
       ops::air_drag_spec(),
+      ops::neo_hookean_system_spec(),
+      ops::neo_hookean_correction_spec(),
       ops::node_force_spec(),
       ops::stiffness_apply_spec(),
       ops::newmark_rhs_spec(),

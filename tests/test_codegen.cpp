@@ -141,8 +141,13 @@ std::vector<KernelSource> example_kernel_sources(const std::string& real) {
   TimestepModel iterating = every;  // and the step's nonlinear iterations
   iterating.implicit_contact = iterating.updated_corotation = true;
   iterating.nonlinear_iterations = 2;
+  TimestepModel neo_hookean = iterating;  // Neo-Hookean, with the rotation updated and lagged
+  neo_hookean.neo_hookean = true;
+  TimestepModel neo_hookean_lagged = neo_hookean;
+  neo_hookean_lagged.updated_corotation = false;
   for (const Variant& v : {Variant{1, true, {}}, Variant{0, false, {}}, Variant{1, false, {}},
-                           Variant{2, true, TimestepModel{true}}, Variant{2, true, every}, Variant{2, true, iterating}}) {
+                           Variant{2, true, TimestepModel{true}}, Variant{2, true, every}, Variant{2, true, iterating},
+                           Variant{2, true, neo_hookean}, Variant{2, true, neo_hookean_lagged}}) {
     const TimestepGraph t = build_timestep_graph(v.planes, v.extension, v.model);
     const KernelPlan plan = plan_kernels(t.graph);
     for (const PlannedKernel* k : plan.unique_kernels())

@@ -470,5 +470,13 @@ TEST(GpuAdjoint, ExtensionsTrajectoryGradientMatchesInterpreter) {
       " with every extension, implicit contact and updated rotation");
 }
 
+TEST(GpuAdjoint, NeoHookeanTrajectoryGradientMatchesInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  trajectory_gradient_matches_interpreter({"material.model=\"neo_hookean\"", "solver.contact=\"implicit\"",
+                                           "solver.nonlinear_iterations=3"},
+                                          " with the Neo-Hookean material and implicit contact");
+}
+
 }  // namespace
 }  // namespace ssc

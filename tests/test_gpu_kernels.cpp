@@ -124,14 +124,16 @@ struct RandomStep {
 // The torus as it is, with Coulomb friction at a ground it reaches (the friction op's kernels
 // and the damped time-step solve), and with every extension (material regions, a stiffness
 // gradient and air drag besides friction), and with the step's nonlinear iterations (implicit
-// contact, updated rotation).
+// contact, updated rotation), and with the Neo-Hookean material (lagged rotation).
 const std::vector<std::vector<std::string>> kVariants = {
     {},
     {"ground.friction=0.4", "ground.height=0.1"},
     {"ground.friction=0.4", "ground.height=0.1", "air_drag=20", "material.stiffness_gradient=[1.5,-0.5,0.8]",
      R"(material.regions=[{"normal":[1,0,0],"offset":0,"youngs_modulus":9000},{"min":[-1,-1,-1],"max":[0,0.3,0],"youngs_modulus":3000}])"},
     {"ground.friction=0.4", "ground.height=0.1", "air_drag=20", "solver.contact=\"implicit\"",
-     "solver.corotation=\"updated\"", "solver.nonlinear_iterations=2"}};
+     "solver.corotation=\"updated\"", "solver.nonlinear_iterations=2"},
+    {"ground.height=0.1", "material.model=\"neo_hookean\"", "solver.contact=\"implicit\"",
+     "solver.nonlinear_iterations=2"}};
 
 void each_forward_kernel(const std::string& real, double tolerance, const std::vector<std::string>& overrides) {
   RandomStep r(overrides);

@@ -151,19 +151,19 @@ TEST(ExtensionSwitches, EachTurnsItsExtensionOffKeepingItsKeys) {
   j["object"] = {{"primitive", "sphere"}, {"radius", 0.1}, {"position", {0, 0.2, 0}}};
   j["grid"] = {{"cell_size", 0.05}};
   j["material"] = {{"regions", {{{"normal", {1, 0, 0}}, {"offset", 0.0}, {"youngs_modulus", 2e4}}}},
-                   {"stiffness_gradient", {1, 0, 0}}};
+                   {"stiffness_gradient", {1, 0, 0}}, {"model", "neo_hookean"}};
   j["ground"] = {{"friction", 0.3}, {"planes", {{{"height", 0.0}}, {{"angles_deg", {90, 0}}, {"height", -1.0}}}}};
   j["air_drag"] = 1.2;
   const Scene on = parse_scene(j, "switches.json");
   const TimestepModel all = timestep_model(on);
-  EXPECT_TRUE(all.friction && all.air_drag && all.stiffness_gradient);
+  EXPECT_TRUE(all.friction && all.air_drag && all.stiffness_gradient && all.neo_hookean);
   EXPECT_EQ(all.region_count, 1);
   EXPECT_EQ(on.planes.size(), 2u);
   j["extensions"] = {{"friction", false}, {"heterogeneous_stiffness", false}, {"second_plane", false},
                      {"air_drag", false}, {"nonlinear_material", false}};
   const Scene off = parse_scene(j, "switches.json");
   const TimestepModel none = timestep_model(off);
-  EXPECT_FALSE(none.friction || none.air_drag || none.stiffness_gradient || none.heterogeneous());
+  EXPECT_FALSE(none.friction || none.air_drag || none.stiffness_gradient || none.heterogeneous() || none.neo_hookean);
   EXPECT_EQ(off.planes.size(), 1u);
   EXPECT_EQ(off.extensions_off.size(), 5u);
   j["extensions"] = {{"frition", false}};

@@ -2,7 +2,8 @@
 // each op of the registry, at the inputs a real timestep gives it (a spinning sphere sliding
 // with friction into a tilted ground, with the displacement extension and every model
 // extension, so that every op is in the graph and contact is active; the ops of the step's
-// nonlinear iterations in the same scene with implicit contact and updated corotation), is
+// nonlinear iterations in the same scene with implicit contact, updated corotation and
+// Neo-Hookean material), is
 // checked in double for
 //   - the dot-product test: its forward parts instantiated with Dual<double> (forward mode,
 //     exact) against its adjoint parts, <y_bar, J x_dot> = <J^T y_bar, x_dot>;
@@ -63,6 +64,7 @@ json check_scene(int variant = 0) {
     j["solver"]["contact"] = "implicit";
     j["solver"]["corotation"] = "updated";
     j["solver"]["nonlinear_iterations"] = 2;
+    j["material"]["model"] = "neo_hookean";
   }
   return j;
 }

@@ -1,6 +1,6 @@
 // Strict reading of JSON config objects: every key is looked up by name, typed and
 // range-checked, unknown keys are rejected, and every error names the file and the full
-// dotted key (for example "scene.json: material.poisson_ratio must be in (0, 0.5)").
+// dotted key (for example "scene.json: material.poisson_ratio must be in [0, 0.5)").
 #pragma once
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>

@@ -153,14 +153,19 @@ MaterialRegion read_region(const JsonReader& r) {
 void read_material(const JsonReader& m, MaterialSpec& mat) {
   mat.youngs_modulus = m.positive("youngs_modulus", m.number("youngs_modulus", mat.youngs_modulus));
   mat.poisson_ratio = m.number("poisson_ratio", mat.poisson_ratio);
-  m.require(mat.poisson_ratio > 0 && mat.poisson_ratio < 0.5, "poisson_ratio",
-            fmt::format("must be in (0, 0.5), found {}", mat.poisson_ratio));
+  m.require(mat.poisson_ratio >= 0 && mat.poisson_ratio < 0.5, "poisson_ratio",
+            fmt::format("must be in [0, 0.5), found {}", mat.poisson_ratio));
   mat.density = m.positive("density", m.number("density", mat.density));
   mat.mass_damping = m.non_negative("mass_damping", m.number("mass_damping", mat.mass_damping));
   mat.stiffness_damping = m.non_negative("stiffness_damping", m.number("stiffness_damping", mat.stiffness_damping));
   if (m.has("regions"))
     for (const JsonReader& g : m.array_of_objects("regions")) mat.regions.push_back(read_region(g));
   m.require(mat.regions.size() <= 64, "regions", "must hold at most 64 regions");
+  const std::string model = m.string("model", "corotated_linear");
+  m.require(model == "corotated_linear" || model == "neo_hookean", "model",
+            "must be \"corotated_linear\" (the paper's) or \"neo_hookean\" (compressible, the same small-strain "
+            "Young's modulus and Poisson ratio)");
+  mat.neo_hookean = model == "neo_hookean";
   mat.stiffness_gradient_key = m.has("stiffness_gradient");
   mat.stiffness_gradient = m.vec3("stiffness_gradient", mat.stiffness_gradient);
   m.reject_unknown_keys();
@@ -185,6 +190,8 @@ void switch_off_extensions(Scene& s) {
       s.material.stiffness_gradient_key = false;
     } else if (name == "second_plane") {
       if (s.planes.size() > 1) s.planes.resize(1);
+    } else if (name == "nonlinear_material") {
+      s.material.neo_hookean = false;
     } else if (name == "air_drag") {
       s.air_drag = 0;
       s.air_drag_key = false;

@@ -40,6 +40,7 @@ struct MaterialSpec {
   std::vector<MaterialRegion> regions;  // later entries override earlier ones
   Eigen::Vector3d stiffness_gradient = Eigen::Vector3d::Zero();  // g, 1/m: E(x) = E exp(g . (x - c))
   bool stiffness_gradient_key = false;  // the scene gives material.stiffness_gradient
+  bool neo_hookean = false;  // material.model: "corotated_linear" (the paper's) or "neo_hookean"
 };
 
 // The model extensions by name (ops named in docs/scene-format.md); each can be switched off

@@ -12,6 +12,7 @@
 #include "runtime/errors.h"
 #include "ops/elasticity.h"
 #include "ops/gather.h"
+#include "ops/neo_hookean.h"
 #include "ops/polar.h"
 #include "ops/stiffness_field.h"
 #include "runtime/batch_loop.h"
@@ -395,10 +396,14 @@ Simulation::CellScan Simulation::scan_cells(int b) const {
     ops::load_cell_corners(u, grid_.cell_nodes.data(), c, uc);
     const Mat3<double> F = ops::cell_deformation_gradient(uc, grid_.h);
     inverted += ssc::det(F) <= 0;
-    Mat3<double> R;
-    ops::polar_rotation(F, R);
     double lambda, mu;
     ops::lame_from_young(E[c], params_[b].poisson_ratio, lambda, mu);
+    if (graph_.neo_hookean) {
+      e += ops::neo_hookean_energy(grid_.cell_volume_weights.data() + 8 * c, lambda, mu, grid_.h, uc);
+      continue;
+    }
+    Mat3<double> R;
+    ops::polar_rotation(F, R);
     e += ops::corotated_energy(R, grid_.cell_volume_weights.data() + 8 * c, lambda, mu, grid_.h, uc);
   }
   return {e, inverted};

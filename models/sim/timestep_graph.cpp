@@ -12,6 +12,7 @@ TimestepModel timestep_model(const Scene& scene) {
   m.stiffness_gradient = scene.material.stiffness_gradient_key;
   m.air_drag = scene.air_drag_key;
   m.implicit_contact = scene.solver.implicit_contact;
+  m.neo_hookean = scene.material.neo_hookean;
   m.updated_corotation = scene.solver.updated_corotation;
   m.nonlinear_iterations = scene.solver.nonlinear_iterations;
   return m;
@@ -67,7 +68,7 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
   t.rotation = g.find_tensor("rotation");
   // The elastic terms of the start-of-step rotation (one cell kernel with the ops above); an
   // updated rotation has its own in each iteration.
-  if (!model.updated_corotation) {
+  if (!model.updated_corotation && !model.neo_hookean) {
     g.add_op("corotation_force", {P("rotation", t.rotation), P("lambda", t.lambda), P("mu", t.mu)},
              {{"corner_force", "corotation_force", D::Cell, 24}});
     g.add_op("stiffness_apply", {P("rotation", t.rotation), P("lambda", t.lambda), P("mu", t.mu), G("u_prev", t.u_prev)},
@@ -109,10 +110,12 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
   // "updated") the rotation at its theta-point, and starts its CG iterations from u_k.
   const std::vector<OpArg> newmark_scalars = {P("dt", t.dt), P("theta", t.theta), P("mass_damping", t.mass_damping),
                                               P("stiffness_damping", t.stiffness_damping)};
-  const bool iterating = implicit_contact || model.updated_corotation;
+  t.neo_hookean = model.neo_hookean;
+  const bool iterating = implicit_contact || model.updated_corotation || model.neo_hookean;
   const int iterations = iterating ? std::max(1, model.nonlinear_iterations) : 1;
   int rotation = t.rotation, iterate = -1;
-  int corner_force = g.find_tensor("corotation_force"), ku = g.find_tensor("k_u_prev");
+  const int corner_force = g.find_tensor("corotation_force");
+  int ku = g.find_tensor("k_u_prev");
   for (int k = 0; k < iterations; ++k) {
     const bool last = k == iterations - 1;
     auto name = [k](const std::string& base) { return k == 0 ? base : base + "_it" + std::to_string(k); };
@@ -133,12 +136,25 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
                 {"polar_status", "polar_status_it" + std::to_string(k), D::Cell, 1}});
       rotation = g.find_tensor("rotation_it" + std::to_string(k));
     }
-    if (model.updated_corotation) {  // the elastic terms of the iterate's rotation
+    int lambda = t.lambda, mu = t.mu, step_corner_force = corner_force;
+    if (model.neo_hookean) {  // the system's Lame parameters at the iterate (ops/neo_hookean.h)
+      g.add_op("neo_hookean_system", {G("u_theta", u_theta), P("lambda", t.lambda), P("mu", t.mu)},
+               {{"lambda_system", name("lambda_system"), D::Cell, 1}, {"mu_system", name("mu_system"), D::Cell, 1}});
+      lambda = g.find_tensor(name("lambda_system"));
+      mu = g.find_tensor(name("mu_system"));
+      g.add_op("neo_hookean_correction",
+               {G("u_theta", u_theta), P("rotation", rotation), P("lambda", t.lambda), P("mu", t.mu),
+                P("lambda_system", lambda), P("mu_system", mu)},
+               {{"corner_force", name("neo_hookean_force"), D::Cell, 24}});
+      step_corner_force = g.find_tensor(name("neo_hookean_force"));
+    } else if (model.updated_corotation) {  // the elastic terms of the iterate's rotation
       g.add_op("corotation_force", {P("rotation", rotation), P("lambda", t.lambda), P("mu", t.mu)},
                {{"corner_force", name("corotation_force"), D::Cell, 24}});
-      g.add_op("stiffness_apply", {P("rotation", rotation), P("lambda", t.lambda), P("mu", t.mu), G("u_prev", t.u_prev)},
+      step_corner_force = g.find_tensor(name("corotation_force"));
+    }
+    if (model.neo_hookean || model.updated_corotation) {
+      g.add_op("stiffness_apply", {P("rotation", rotation), P("lambda", lambda), P("mu", mu), G("u_prev", t.u_prev)},
                {{"ku_corner", name("k_u_prev"), D::Cell, 24}});
-      corner_force = g.find_tensor(name("corotation_force"));
       ku = g.find_tensor(name("k_u_prev"));
     }
     int step_point_force = point_force, step_damping = damping, step_body_force = body_force;
@@ -156,7 +172,7 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
       step_damping = g.find_tensor(name("contact_damping"));
       step_body_force = g.find_tensor(name("contact_node_force"));
     }
-    std::vector<OpArg> force_inputs = {G("corner_force", corner_force), P("mass", t.mass), P("gravity", t.gravity)};
+    std::vector<OpArg> force_inputs = {G("corner_force", step_corner_force), P("mass", t.mass), P("gravity", t.gravity)};
     if (step_point_force >= 0) force_inputs.push_back(G("point_force", step_point_force));
     if (step_body_force >= 0) force_inputs.push_back(P("body_force", step_body_force));
     g.add_op("node_force", force_inputs, {{"force", name("force"), D::Node, 3}});
@@ -165,7 +181,7 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
     if (step_damping >= 0) rhs_inputs.push_back(P("damping", step_damping));
     rhs_inputs.insert(rhs_inputs.end(), newmark_scalars.begin(), newmark_scalars.end());
     g.add_op("newmark_rhs", rhs_inputs, {{"rhs", name("rhs"), D::Node, 3}});
-    std::vector<OpArg> solve_inputs = {OpArg{"rotation", rotation, A::Opaque},  P("lambda", t.lambda), P("mu", t.mu),
+    std::vector<OpArg> solve_inputs = {OpArg{"rotation", rotation, A::Opaque},  P("lambda", lambda), P("mu", mu),
                                        OpArg{"mass", t.mass, A::Opaque},        OpArg{"rhs", g.find_tensor(name("rhs")), A::Opaque},
                                        OpArg{"u_prev", t.u_prev, A::Opaque},    OpArg{"v_prev", t.v_prev, A::Opaque},
                                        OpArg{"fixed", t.fixed, A::Opaque}};

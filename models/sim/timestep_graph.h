@@ -12,6 +12,7 @@ struct TimestepGraph {
   int ground_planes = -1, fixed;
   int region_youngs = -1, stiffness_gradient = -1;  // with the heterogeneous_stiffness extension
   int air_drag = -1;                                // with the air_drag extension
+  bool neo_hookean = false;                         // the elastic energy is the Neo-Hookean one
   // State read by the step and its successors written by it.
   int u_prev, v_prev, band_guess = -1;
   int u, v, band_u = -1, rotation, mass, lambda, mu, cg_iterations;
@@ -28,6 +29,7 @@ struct TimestepModel {
   // The step's nonlinear iterations (ops/contact_implicit.h): implicit contact (Newton on the
   // penalty force), the rotation updated within the step, and how many solves a step takes.
   bool implicit_contact = false, updated_corotation = false;
+  bool neo_hookean = false;  // material.model "neo_hookean" (ops/neo_hookean.h), through the iterations
   int nonlinear_iterations = 4;
 
   bool heterogeneous() const { return region_count > 0 || stiffness_gradient; }
