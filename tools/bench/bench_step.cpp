@@ -1,6 +1,7 @@
 // Per-step benchmarks for the torus, the dragon and a teddy-sized body (and, for what they
 // cost, the torus with every model extension on, "torus-extensions", with implicit contact,
-// "torus-implicit", and with the rotation updated in the step, "torus-updated"): forward and
+// "torus-implicit", with the rotation updated in the step, "torus-updated", and with the
+// Neo-Hookean material, "torus-neo-hookean"): forward and
 // forward+adjoint steps on the CPU interpreter; on the GPU (when one is usable) the
 // generated forward step, the generated adjoint step, and a whole 10-step J_SSC
 // gradient evaluation per step (host cost and copies included), single
@@ -39,6 +40,9 @@ Body& body(const std::string& name) {
     else if (name == "torus-updated")
       b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/torus.json",
                             {"grid.band_width=0", "solver.corotation=\"updated\""});
+    else if (name == "torus-neo-hookean")
+      b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/torus.json",
+                            {"grid.band_width=0", "material.model=\"neo_hookean\""});
     else if (name == "torus-extensions")
       b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/torus.json",
                             {"grid.band_width=0", "ground.friction=0.4", "air_drag=1.2",
@@ -204,7 +208,7 @@ void register_all() {
         ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
   }
   // torus-extensions: friction, two stiffness fields, air drag
-  for (const std::string ext : {"torus-extensions", "torus-implicit", "torus-updated"}) {
+  for (const std::string ext : {"torus-extensions", "torus-implicit", "torus-updated", "torus-neo-hookean"}) {
     benchmark::RegisterBenchmark(("CpuForwardStep/" + ext).c_str(), BM_CpuForwardStep, ext)->Arg(1)->Unit(benchmark::kMillisecond);
     benchmark::RegisterBenchmark(("GpuForwardStep/" + ext + "/double").c_str(), BM_GpuForwardStep, ext, std::string("double"))
         ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
