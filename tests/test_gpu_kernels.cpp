@@ -170,6 +170,17 @@ void each_forward_kernel(const std::string& real, double tolerance, const std::v
   std::printf("[ %s ] every forward kernel: worst relative error %.3g\n", real.c_str(), worst);
 }
 
+// The Neo-Hookean correction's theta-point cotangent is the difference of two nearly equal
+// terms, (R K_s R^T - dy_NH/du)^T f_bar (ops/neo_hookean.h: the iteration's stiffness is
+// scaled to approximate the tangent), each computed to float precision: relative to the small
+// difference, float's error is up to about 1e-7 times the terms' ratio to it (measured 2.2e-2
+// on the torus's random step, 1.1e-4 in the next iteration). Double shows no such loss
+// (below 1e-10); the allowance is for float alone.
+double cancellation_allowance(const std::string& real, const std::string& kernels, const std::string& tensor) {
+  const bool correction = kernels.find("neo_hookean_correction") != std::string::npos;
+  return real == "float" && correction && tensor.rfind("u_theta", 0) == 0 ? 1e3 : 1.0;
+}
+
 void each_adjoint_kernel(const std::string& real, double tolerance, const std::vector<std::string>& overrides) {
   RandomStep r(overrides);
   Interpreter<double>& cpu = r.sim.interpreter();
@@ -202,7 +213,8 @@ void each_adjoint_kernel(const std::string& real, double tolerance, const std::v
       changed |= relative_difference(want, before.all(t)) > 1e-6;
       line += fmt::format(" {}={:.2g}", graph.tensor(t).name, rel);
       worst = std::max(worst, rel);
-      EXPECT_LT(rel, tolerance) << graph.tensor(t).name << " after adjoint kernels" << g.names;
+      EXPECT_LT(rel, tolerance * cancellation_allowance(real, g.names, graph.tensor(t).name))
+          << graph.tensor(t).name << " after adjoint kernels" << g.names;
     }
     EXPECT_TRUE(changed) << "adjoint kernels" << g.names << " changed no cotangent: the test could not fail";
     std::printf("[ %s ] adjoint kernels [%d..%d]%s:%s\n", real.c_str(), g.first, g.last, g.names.c_str(), line.c_str());
