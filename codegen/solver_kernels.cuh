@@ -210,7 +210,8 @@ __device__ __forceinline__ void pcg_start(int i, int len, double tol, int max_it
     acc[2] += double(rk) * double(rk);
   }
   block_sum<3>(acc);
-  const double b_norm = sqrt(acc[0]);
+  // A negligible right-hand side (runtime/pcg.h) counts as 0: x = 0.
+  const double b_norm = sqrt(acc[0]) < (sizeof(R) == 4 ? 1e-20 : 1e-100) ? 0.0 : sqrt(acc[0]);
   if (b_norm == 0.0)
     for (int k = i; k < len; k += SSC_ITEM) x[k] = R(0);
   if (i == 0) {
@@ -390,7 +391,7 @@ __device__ __forceinline__ void grid_own_update(GridPcg<R>& g, int n, const R* r
 template <class R, class Iteration>
 __device__ __forceinline__ void grid_loop(GridPcg<R>& g, int count, const double (&start)[3], double bb,
                                           Iteration iteration) {
-  const double b_norm = sqrt(bb);
+  const double b_norm = sqrt(bb) < (sizeof(R) == 4 ? 1e-20 : 1e-100) ? 0.0 : sqrt(bb);  // runtime/pcg.h
   double gamma = start[0], alpha = start[0] / start[1], r_norm = sqrt(start[2]), rel = 0;
   int its = 0;
   bool active = false, converged = false;

@@ -2,7 +2,10 @@
 //
 // Dot products are summed in fixed blocks (parallel over blocks, blocks added in order,
 // in double), so the result does not depend on the number of threads. Stops when
-// ||r|| <= tolerance * ||b||; the caller decides what non-convergence means.
+// ||r|| <= tolerance * ||b||; the caller decides what non-convergence means. A right-hand
+// side below negligible_rhs_norm gives x = 0: an adjoint cotangent that has decayed to
+// 1e-150 (through the contact's exp(-alpha d)) would otherwise underflow p.Ap to 0 and
+// break the iteration with 0/0, and it adds nothing a double (or float) gradient can hold.
 #pragma once
 #include <cmath>
 #include <vector>
@@ -45,6 +48,11 @@ double deterministic_dot(const Real* a, const Real* b, long n) {
   return total;
 }
 
+template <class Real>
+constexpr double negligible_rhs_norm() {
+  return sizeof(Real) == 4 ? 1e-20 : 1e-100;
+}
+
 // apply(p, Ap) computes the (SPD) operator; inv_diag is the Jacobi preconditioner.
 template <class Real, class Apply>
 PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b, Real* x, double tolerance,
@@ -52,7 +60,7 @@ PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b,
   std::vector<Real> r(n), z(n), p(n), q(n);
   PcgResult result;
   const double b_norm = std::sqrt(deterministic_dot(b, b, n));
-  if (b_norm == 0.0) {
+  if (b_norm < negligible_rhs_norm<Real>()) {
     for (long i = 0; i < n; ++i) x[i] = Real(0);
     result.converged = true;
     return result;
