@@ -230,3 +230,40 @@ std::vector<double> SurfaceConstraintCost::point_phi(const std::vector<Eigen::Ve
 }
 
 }  // namespace ssc
+
+namespace ssc {
+
+std::vector<SurfaceConstraintCost::PointResidual> SurfaceConstraintCost::point_residuals(
+    const std::vector<Eigen::Vector3d>& points, const double* u, const double* band_u) const {
+  const SdfGrid& s = grid_.sdf;
+  const long nx = s.size.x(), nxy = nx * s.size.y();
+  const std::vector<Match> matches = match_points(points, u, band_u);
+  std::vector<PointResidual> out(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const Match& m = matches[i];
+    if (m.cell < 0) continue;
+    Vec3<double> X[8], X0[8];
+    double phi[8];
+    for (int k = 0; k < 8; ++k) {
+      const long n = cells_[m.cell] + (k & 1) + ((k >> 1) & 1) * nx + ((k >> 2) & 1) * nxy;
+      X[k] = node_point(grid_, corners_[m.cell][k], n, u, band_u);
+      const Eigen::Vector3d r = s.node_position(int(n % nx), int((n / nx) % s.size.y()), int(n / nxy));
+      X0[k] = make_vec3(r.x(), r.y(), r.z());
+      phi[k] = s.phi[n];
+    }
+    const Vec3<double> abc = make_vec3(m.a, m.b, m.c);
+    Vec3<double> dphi = zero3<double>();  // d phi / d abc
+    for (int k = 0; k < 8; ++k) dphi += phi[k] * ops::trilinear_weight_gradient(abc, k);
+    // d phi / dx = J^-T d phi / d abc, J = dx / d abc of the deformed cell.
+    const Vec3<double> g = mul_transposed(inverse(ops::trilinear_jacobian(X, abc)), dphi);
+    const Vec3<double> rest = ops::trilinear_point(X0, abc);
+    PointResidual& r = out[i];
+    r.phi = m.phi;
+    r.rest = Eigen::Vector3d(rest.x, rest.y, rest.z);
+    const double len = norm(g);
+    if (len > 0) r.normal = Eigen::Vector3d(g.x / len, g.y / len, g.z / len);
+  }
+  return out;
+}
+
+}  // namespace ssc

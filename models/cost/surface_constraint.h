@@ -14,6 +14,8 @@
 #pragma once
 #include <Eigen/Core>
 #include <array>
+#include <cmath>
+#include <limits>
 #include <vector>
 
 #include "models/grid/sim_grid.h"
@@ -45,6 +47,18 @@ class SurfaceConstraintCost {
   // Rest-pose SDF value at the matched location of each point (NaN if unmatched);
   // for pictures and residual maps.
   std::vector<double> point_phi(const std::vector<Eigen::Vector3d>& points, const double* u, const double* band_u) const;
+
+  // Per point: phi (the signed distance to the simulated surface, metres; NaN unmatched), the
+  // rest-shape position of its match, and the simulated surface's outward unit normal there
+  // (the rest SDF's gradient mapped by the cell's deformation): the point lies phi * normal
+  // off the surface.
+  struct PointResidual {
+    double phi = std::numeric_limits<double>::quiet_NaN();
+    Eigen::Vector3d rest = Eigen::Vector3d::Zero(), normal = Eigen::Vector3d::Zero();
+    bool matched() const { return !std::isnan(phi); }
+  };
+  std::vector<PointResidual> point_residuals(const std::vector<Eigen::Vector3d>& points, const double* u,
+                                             const double* band_u) const;
 
  private:
   struct Match {

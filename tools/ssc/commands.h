@@ -14,5 +14,7 @@ Command register_gradient(CLI::App& app);
 Command register_sweep(CLI::App& app);
 Command register_reconstruct(CLI::App& app);
 Command register_kernels(CLI::App& app);
+Command register_residuals(CLI::App& app);
+Command register_diagnose(CLI::App& app);
 
 }  // namespace ssc

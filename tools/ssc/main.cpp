@@ -42,6 +42,8 @@ int main(int argc, char** argv) {
   add(ssc::register_sweep);
   add(ssc::register_reconstruct);
   add(ssc::register_kernels);
+  add(ssc::register_residuals);
+  add(ssc::register_diagnose);
   if (argc > 1 && argv[1][0] != '-') {
     std::string names;
     bool known = false;

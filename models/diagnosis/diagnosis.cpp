@@ -1,0 +1,561 @@
+// `ssc diagnose` (see diagnosis.h).
+#include "models/diagnosis/diagnosis.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <random>
+#include <set>
+
+#include "models/cost/surface_constraint.h"
+#include "models/optim/reconstruction.h"
+#include "models/sim/parameters.h"
+#include "runtime/errors.h"
+
+namespace ssc {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// How a model differs from the base: scene overrides, parameters to fit beside the base's
+// (with the range their starts are drawn from), and a change of the loaded problem.
+struct ModelSpec {
+  std::string name;
+  std::vector<std::string> overrides, extra;
+  std::map<std::string, std::pair<double, double>> ranges;  // per extra parameter
+  bool log_range = false;                                   // draw log-uniformly (positive parameters)
+  std::function<void(Problem&)> adjust;
+  // The scene loads with the extra parameters named (which puts friction's and drag's ops in
+  // the model), unless adjust makes what they name (a new plane).
+  bool extra_in_load = true;
+};
+
+PhysicalParameters with_values(const Scene& scene, const std::vector<std::string>& names, const Eigen::VectorXd& v) {
+  PhysicalParameters p = PhysicalParameters::from_scene(scene);
+  for (size_t i = 0; i < names.size(); ++i) set_parameter(p, names[i], v[Eigen::Index(i)]);
+  return p;
+}
+
+std::vector<double> per_frame_costs(const Problem& problem, const PhysicalParameters& p, const std::string& device) {
+  Simulation sim(problem.scene, problem.grid, 1, true);
+  if (device == "cuda") sim.use_gpu();
+  sim.set_parameters(0, p);
+  const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
+  GradientOptions o;
+  o.gradient = false;
+  const CostGradient r = evaluate_cost_gradient(sim, cost, problem.frames, o)[0];
+  std::vector<double> out;
+  for (const FrameCost& f : r.frames) out.push_back(f.cost);
+  return out;
+}
+
+Problem held_in(const Problem& p, int frames) {
+  Problem q = p;
+  q.frames.resize(size_t(frames));
+  return q;
+}
+
+// The fit of one model on the held-in frames. With base_starts (the base fit's start values,
+// one map per start), every start takes the base parameters' values from there and draws the
+// extension's from their ranges: every model gets the same budget from the same points.
+FittedModel fit_model(const ModelSpec& spec, const std::string& scene_path, const std::vector<std::string>& overrides,
+                      const std::string& observations, double phi_max, const DiagnosisOptions& o, int heldin,
+                      const std::vector<std::map<std::string, double>>* base_starts,
+                      std::vector<std::map<std::string, double>>* starts_used = nullptr) {
+  const auto t0 = std::chrono::steady_clock::now();
+  FittedModel m;
+  m.name = spec.name;
+  std::vector<std::string> all_overrides = overrides;
+  all_overrides.insert(all_overrides.end(), spec.overrides.begin(), spec.overrides.end());
+  std::vector<std::string> fit = o.fit;
+  if (spec.extra_in_load) fit.insert(fit.end(), spec.extra.begin(), spec.extra.end());
+  m.problem = load_problem(scene_path, all_overrides, observations, phi_max, fit);
+  if (spec.adjust) spec.adjust(m.problem);
+  if (!spec.extra_in_load) fit.insert(fit.end(), spec.extra.begin(), spec.extra.end());
+  m.names = expand_parameter_names(fit, PhysicalParameters::from_scene(m.problem.scene));
+  m.extra = spec.extra;
+  ReconstructionOptions ro;
+  ro.fit = fit;
+  ro.starts = o.starts;
+  ro.optimizer = o.optimizer;
+  ro.optimizer_options.max_iterations = o.iterations;
+  ro.seed = o.seed;
+  ro.device = o.device;
+  if (base_starts) {
+    std::mt19937_64 rng(o.seed * 7919 + std::hash<std::string>{}(spec.name));
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (const std::map<std::string, double>& base_values : *base_starts) {
+      Eigen::VectorXd x(Eigen::Index(m.names.size()));
+      for (size_t i = 0; i < m.names.size(); ++i) {
+        if (const auto b = base_values.find(m.names[i]); b != base_values.end()) {
+          x[Eigen::Index(i)] = b->second;
+          continue;
+        }
+        const auto r = spec.ranges.at(m.names[i]);
+        const double u = unit(rng);
+        x[Eigen::Index(i)] = spec.log_range ? r.first * std::pow(r.second / r.first, u) : r.first + u * (r.second - r.first);
+      }
+      ro.initial_values.push_back(x);
+    }
+  }
+  const ReconstructionResult r = reconstruct(held_in(m.problem, heldin), ro);
+  if (starts_used)
+    for (const StartRecord& start : r.starts) {
+      std::map<std::string, double> v;
+      for (size_t i = 0; i < r.names.size(); ++i) v[r.names[i]] = start.initial[Eigen::Index(i)];
+      starts_used->push_back(v);
+    }
+  m.seconds = seconds_since(t0);
+  if (r.best < 0) {
+    m.failed = true;
+    m.failure = r.starts.empty() ? "no start" : r.starts[0].failure;
+    return m;
+  }
+  m.values = r.starts[size_t(r.best)].final;
+  if (r.starts[size_t(r.best)].stop_reason == "iteration limit")
+    m.note = fmt::format("the fit stopped at the iteration limit ({} iterations)", o.iterations);
+  m.frame_costs = per_frame_costs(m.problem, with_values(m.problem.scene, m.names, m.values), o.device);
+  for (size_t f = 0; f < m.frame_costs.size(); ++f) (int(f) < heldin ? m.heldin_cost : m.heldout_cost) += m.frame_costs[f];
+  m.seconds = seconds_since(t0);
+  return m;
+}
+
+std::map<std::string, double> values_by_name(const FittedModel& m) {
+  std::map<std::string, double> v;
+  for (size_t i = 0; i < m.names.size(); ++i) v[m.names[i]] = m.values[Eigen::Index(i)];
+  return v;
+}
+
+std::string plane_parameter(int k, const std::string& key) {
+  return k == 0 ? "ground." + key : fmt::format("ground.planes[{}].{}", k, key);
+}
+
+// The plane the data ask for: the direction (of 8 horizontal ones and up) along which the
+// base fit's simulated body went furthest beyond every observed point of the held-in frames.
+// Empty when it never did by more than half a cell.
+struct PlaneProposal {
+  bool found = false;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitY();
+  double height = 0, overshoot = 0;
+};
+
+PlaneProposal propose_plane(const FittedModel& base, int heldin) {
+  const Problem& p = base.problem;
+  const PhysicalParameters params = with_values(p.scene, base.names, base.values);
+  const Eigen::Vector3d up = -params.gravity.normalized();
+  Eigen::Vector3d e1 = up.unitOrthogonal(), e2 = up.cross(e1);
+  std::vector<Eigen::Vector3d> directions;
+  for (int a = 0; a < 8; ++a) directions.push_back(std::cos(a * M_PI / 4) * e1 + std::sin(a * M_PI / 4) * e2);
+  directions.push_back(up);
+  std::vector<double> observed(directions.size(), -1e300), simulated(directions.size(), -1e300);
+  Simulation sim(p.scene, p.grid, 1, false);
+  sim.set_parameters(0, params);
+  int step = 0;
+  const long nx = p.grid.sdf.size.x(), nxy = nx * p.grid.sdf.size.y();
+  for (int f = 0; f < heldin; ++f) {
+    const ObservedFrame& frame = p.frames[size_t(f)];
+    while (step < frame.step) sim.step(), ++step;
+    const double* u = sim.displacement(0);
+    for (size_t d = 0; d < directions.size(); ++d) {
+      for (const Eigen::Vector3d& x : frame.points) observed[d] = std::max(observed[d], x.dot(directions[d]));
+      if (frame.points.empty()) continue;
+      for (int i = 0; i < p.grid.node_count; ++i) {
+        const long n = p.grid.node_grid[size_t(i)];
+        const Eigen::Vector3d x = p.grid.sdf.node_position(int(n % nx), int((n / nx) % p.grid.sdf.size.y()), int(n / nxy)) +
+                                  Eigen::Vector3d(u[3 * i], u[3 * i + 1], u[3 * i + 2]);
+        simulated[d] = std::max(simulated[d], x.dot(directions[d]));
+      }
+    }
+  }
+  PlaneProposal best;
+  for (size_t d = 0; d < directions.size(); ++d) {
+    const double over = simulated[d] - observed[d];
+    if (over > 0.5 * p.grid.h && over > best.overshoot) {
+      best.found = true;
+      best.overshoot = over;
+      best.normal = -directions[d];
+      best.height = -observed[d];  // n . x >= height keeps the body on the observed side
+    }
+  }
+  return best;
+}
+
+// Fraction of the base's held-out cost a model removes, and its moving-block bootstrap
+// interval (5 %, 95 %) over the held-out frames.
+struct Gain {
+  double value = 0, low = 0, high = 0;
+};
+
+Gain held_out_gain(const std::vector<double>& base, const std::vector<double>& model, int heldin, int resamples,
+                   std::uint64_t seed) {
+  const int n = int(base.size()) - heldin;
+  Gain g;
+  if (n <= 0 || model.size() != base.size()) return g;
+  auto gain_of = [&](const std::vector<int>& frames) {
+    double b = 0, m = 0;
+    for (int f : frames) b += base[size_t(heldin + f)], m += model[size_t(heldin + f)];
+    return b > 0 ? 1 - m / b : 0.0;
+  };
+  std::vector<int> all(static_cast<size_t>(n));
+  for (int f = 0; f < n; ++f) all[size_t(f)] = f;
+  g.value = gain_of(all);
+  const int block = std::max(1, n / 4), blocks = (n + block - 1) / block;
+  std::mt19937_64 rng(seed);
+  std::uniform_int_distribution<int> start(0, n - block);
+  std::vector<double> samples;
+  for (int r = 0; r < resamples; ++r) {
+    std::vector<int> frames;
+    for (int b = 0; b < blocks; ++b) {
+      const int s = start(rng);
+      for (int k = 0; k < block; ++k) frames.push_back(s + k);
+    }
+    samples.push_back(gain_of(frames));
+  }
+  std::sort(samples.begin(), samples.end());
+  g.low = samples[size_t(0.05 * (samples.size() - 1))];
+  g.high = samples[size_t(0.95 * (samples.size() - 1))];
+  return g;
+}
+
+// The score test: d (held-in cost) / d (the extension's parameters) at the base fit with
+// every extension off, as the relative decrease a typical amount would bring (friction 0.3,
+// air drag 10 kg/m^3: one-sided, they cannot go below 0; a stiffness gradient of 2 1/m in
+// its best direction).
+std::map<std::string, double> score_test(const FittedModel& base, const std::string& scene_path,
+                                         const std::vector<std::string>& overrides, const std::string& observations,
+                                         double phi_max, const DiagnosisOptions& o, int heldin) {
+  std::vector<std::string> over = overrides;
+  over.push_back("air_drag=1");
+  std::vector<std::string> fit = o.fit;
+  const int planes = int(base.problem.scene.planes.size());
+  for (int k = 0; k < planes; ++k) fit.push_back(plane_parameter(k, "friction"));
+  fit.push_back("material.stiffness_gradient");
+  Problem p = load_problem(scene_path, over, observations, phi_max, fit);
+  p.frames.resize(size_t(heldin));
+  PhysicalParameters params = PhysicalParameters::from_scene(p.scene);
+  for (const auto& [name, value] : values_by_name(base)) set_parameter(params, name, value);
+  for (PlaneSpec& plane : params.planes) plane.friction = 0;
+  params.air_drag = 0;
+  params.stiffness_gradient.setZero();
+  Simulation sim(p.scene, p.grid, 1, true);
+  if (o.device == "cuda") sim.use_gpu();
+  sim.set_parameters(0, params);
+  const SurfaceConstraintCost cost(p.grid, p.phi_max);
+  const CostGradient r = evaluate_cost_gradient(sim, cost, p.frames, {})[0];
+  std::map<std::string, double> score;
+  if (!(r.cost > 0)) return score;
+  double friction = 0;
+  for (int k = 0; k < planes; ++k) friction += parameter_gradient(r.gradient, params, plane_parameter(k, "friction"));
+  score["friction"] = std::max(0.0, -0.3 * friction) / r.cost;
+  score["air_drag"] = std::max(0.0, -10.0 * parameter_gradient(r.gradient, params, "air_drag")) / r.cost;
+  Eigen::Vector3d g;
+  for (int a = 0; a < 3; ++a)
+    g[a] = parameter_gradient(r.gradient, params, std::string("material.stiffness_gradient.") + "xyz"[a]);
+  score["heterogeneous_stiffness"] = 2.0 * g.norm() / r.cost;
+  return score;
+}
+
+// The placebo's parameters: the initial velocity's components (horizontal ones first, then
+// vertical, then the spin's) that the base fit leaves alone: freedom to fit the held-in
+// frames that no missing effect stands behind, and that persists into the held-out frames
+// no more than any wrong start does. A constant force would not do: it mimics friction.
+std::vector<std::string> placebo_parameters(const Scene& scene, const std::vector<std::string>& base_fit) {
+  const PhysicalParameters p = PhysicalParameters::from_scene(scene);
+  const std::vector<std::string> fitted = expand_parameter_names(base_fit, p);
+  const Eigen::Vector3d g = p.gravity.cwiseAbs();
+  int along = 0;
+  for (int a = 1; a < 3; ++a)
+    if (g[a] > g[along]) along = a;
+  std::vector<std::string> order;
+  for (int a = 0; a < 3; ++a)
+    if (a != along) order.push_back(std::string("initial.linear_velocity.") + "xyz"[a]);
+  order.push_back(std::string("initial.linear_velocity.") + "xyz"[along]);
+  for (int a = 0; a < 3; ++a) order.push_back(std::string("initial.angular_velocity.") + "xyz"[a]);
+  std::vector<std::string> out;
+  for (const std::string& name : order)
+    if (std::find(fitted.begin(), fitted.end(), name) == fitted.end()) out.push_back(name);
+  return out;
+}
+
+std::string percent(double x) { return fmt::format("{:.0f} %", 100 * x); }
+
+}  // namespace
+
+Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>& overrides,
+                   const std::string& observations, double phi_max, const DiagnosisOptions& o,
+                   const DiagnosisProgress& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto say = [&](const std::string& s) {
+    if (progress) progress(s);
+  };
+  for (const std::string& c : o.candidates)
+    if (std::find(diagnosis_candidate_names().begin(), diagnosis_candidate_names().end(), c) ==
+        diagnosis_candidate_names().end())
+      throw InputError(fmt::format("--candidates: unknown candidate '{}'; known: friction, heterogeneous_stiffness, "
+                                   "second_plane, nonlinear_material, air_drag",
+                                   c));
+  if (!(o.holdout > 0 && o.holdout < 1)) throw InputError("--holdout must be in (0, 1)");
+  Diagnosis d;
+  say("base model");
+  {
+    const Problem probe = load_problem(scene_path, overrides, observations, phi_max, o.fit);
+    const int n = int(probe.frames.size());
+    d.heldin_frames = std::max(2, int(std::ceil((1 - o.holdout) * n)));
+    d.heldout_frames = n - d.heldin_frames;
+    if (d.heldout_frames < 2)
+      throw InputError(fmt::format("{}: {} observed frames leave fewer than 2 to hold out at --holdout {}; observe more "
+                                   "frames or raise --holdout",
+                                   observations, n, o.holdout));
+    d.heldout_from = probe.frames[size_t(d.heldin_frames)].step * probe.scene.time.dt;
+  }
+  std::vector<std::map<std::string, double>> base_starts;
+  d.base = fit_model({"base", {}, {}, {}, false, {}}, scene_path, overrides, observations, phi_max, o, d.heldin_frames,
+                     nullptr, &base_starts);
+  if (d.base.failed) throw SimulationError("the base model's fit failed at every start: " + d.base.failure);
+  const std::map<std::string, double> base_values = values_by_name(d.base);
+  const int planes = int(d.base.problem.scene.planes.size());
+
+  say("score test");
+  std::map<std::string, double> score;
+  try {
+    score = score_test(d.base, scene_path, overrides, observations, phi_max, o, d.heldin_frames);
+  } catch (const std::exception& e) {
+    d.lines.push_back(std::string("the score test failed: ") + e.what());
+  }
+  std::vector<std::string> order = o.candidates;  // by score, the untestable ones last
+  std::stable_sort(order.begin(), order.end(), [&](const std::string& a, const std::string& b) {
+    const double sa = score.count(a) ? score.at(a) : -1, sb = score.count(b) ? score.at(b) : -1;
+    return sa > sb;
+  });
+
+  const std::vector<std::string> spare = placebo_parameters(d.base.problem.scene, o.fit);
+  for (int k = 1; k <= 3 && k <= int(spare.size()); ++k) {
+    ModelSpec placebo{fmt::format("placebo_{}", k), {}, {}, {}, false, {}};
+    for (int i = 0; i < k; ++i) {
+      placebo.extra.push_back(spare[size_t(i)]);
+      const double v0 = get_parameter(PhysicalParameters::from_scene(d.base.problem.scene), spare[size_t(i)]);
+      placebo.ranges[spare[size_t(i)]] = {v0 - 0.2, v0 + 0.2};  // m/s (rad/s for a spin)
+    }
+    say(placebo.name);
+    d.placebos.push_back(
+        fit_model(placebo, scene_path, overrides, observations, phi_max, o, d.heldin_frames, &base_starts));
+  }
+
+  for (const std::string& name : order) {
+    ModelSpec spec{name, {}, {}, {}, false, {}};
+    std::string skip;
+    if (name == "friction") {
+      if (planes == 0) skip = "the scene has no ground plane";
+      for (int k = 0; k < planes; ++k) {
+        spec.extra.push_back(plane_parameter(k, "friction"));
+        spec.ranges[spec.extra.back()] = {0.02, 1.0};
+      }
+      spec.log_range = true;
+      spec.adjust = [planes](Problem& p) {  // a positive nominal value (the starts are drawn anyway)
+        for (int k = 0; k < planes; ++k) p.scene.planes[size_t(k)].friction = 0.1;
+      };
+    } else if (name == "air_drag") {
+      spec.overrides = {"air_drag=1"};
+      spec.extra = {"air_drag"};
+      spec.ranges["air_drag"] = {0.5, 50};
+      spec.log_range = true;
+    } else if (name == "heterogeneous_stiffness") {
+      spec.overrides = {"material.stiffness_gradient=[0,0,0]"};
+      spec.extra = {"material.stiffness_gradient"};
+      for (const char* a : {"x", "y", "z"}) spec.ranges[std::string("material.stiffness_gradient.") + a] = {-2, 2};
+    } else if (name == "nonlinear_material") {
+      spec.overrides = {"material.model=\"neo_hookean\""};
+    } else if (name == "second_plane") {
+      const PlaneProposal plane = propose_plane(d.base, d.heldin_frames);
+      if (!plane.found) {
+        skip = "the fitted body never went beyond the observed points by half a cell: no plane to propose";
+      } else {
+        const PlaneSpec first = planes > 0 ? d.base.problem.scene.planes[0] : PlaneSpec{};
+        const std::string height = plane_parameter(planes, "height");
+        spec.extra = {height};
+        spec.extra_in_load = false;
+        const double h = d.base.problem.grid.h;
+        spec.ranges[height] = {plane.height - 2 * h, plane.height + 2 * h};
+        spec.adjust = [plane, first](Problem& p) {
+          PlaneSpec s = first;
+          s.normal = plane.normal;
+          s.height = plane.height;
+          s.friction = 0;
+          p.scene.planes.push_back(s);
+        };
+      }
+    }
+    CandidateVerdict v;
+    v.name = name;
+    if (score.count(name)) v.score = score.at(name);
+    if (!skip.empty()) {
+      FittedModel m;
+      m.name = name;
+      m.failed = true;
+      m.failure = skip;
+      d.candidates.push_back(m);
+      v.warnings.push_back("not fitted: " + skip);
+      d.verdicts.push_back(v);
+      continue;
+    }
+    say(name);
+    FittedModel m;
+    try {
+      m = fit_model(spec, scene_path, overrides, observations, phi_max, o, d.heldin_frames, &base_starts);
+    } catch (const std::exception& e) {
+      m.name = name;
+      m.failed = true;
+      m.failure = e.what();
+    }
+    if (m.failed) v.warnings.push_back("the fit failed: " + m.failure);
+    if (!m.note.empty()) v.warnings.push_back(m.note);
+    d.candidates.push_back(std::move(m));
+    d.verdicts.push_back(v);
+  }
+
+  // Verdicts against the placebos (0 extra parameters: none; more than 3: the
+  // three-parameter placebo's gain scaled by the count).
+  auto placebo_gain = [&](size_t extra) {
+    if (extra == 0 || d.placebos.empty()) return 0.0;
+    const size_t k = std::min(extra, d.placebos.size());
+    const FittedModel& p = d.placebos[k - 1];
+    if (p.failed) return 0.0;
+    const double g = held_out_gain(d.base.frame_costs, p.frame_costs, d.heldin_frames, 1, o.seed).value;
+    return g * double(extra) / double(k);
+  };
+  std::vector<size_t> named;
+  for (size_t i = 0; i < d.candidates.size(); ++i) {
+    FittedModel& m = d.candidates[i];
+    CandidateVerdict& v = d.verdicts[i];
+    if (m.failed) continue;
+    size_t extra = 0;
+    for (const std::string& e : m.extra) extra += expand_parameter_names({e}, PhysicalParameters::from_scene(m.problem.scene)).size();
+    const Gain g = held_out_gain(d.base.frame_costs, m.frame_costs, d.heldin_frames, o.bootstrap, o.seed + i);
+    v.gain = g.value, v.gain_low = g.low, v.gain_high = g.high;
+    v.placebo_gain = std::max(0.0, placebo_gain(extra));
+    v.passes = v.gain >= o.min_gain && v.gain_low > v.placebo_gain + o.margin;
+    if (v.passes) named.push_back(i);
+  }
+  std::sort(named.begin(), named.end(), [&](size_t a, size_t b) { return d.verdicts[a].gain > d.verdicts[b].gain; });
+  if (!named.empty()) d.cause = d.verdicts[named[0]].name;
+  for (size_t a = 0; a < named.size(); ++a)
+    for (size_t b = a + 1; b < named.size(); ++b) {
+      // Indistinguishable: the gain of one over the other has an interval containing 0.
+      const Gain diff = held_out_gain(d.candidates[named[b]].frame_costs, d.candidates[named[a]].frame_costs,
+                                      d.heldin_frames, o.bootstrap, o.seed + 99);
+      if (diff.low <= 0) d.confounded.push_back({d.verdicts[named[a]].name, d.verdicts[named[b]].name});
+    }
+
+  // What to tell the user.
+  if (named.empty()) {
+    size_t best = d.verdicts.size();
+    for (size_t i = 0; i < d.verdicts.size(); ++i)
+      if (!d.candidates[i].failed && (best == d.verdicts.size() || d.verdicts[i].gain > d.verdicts[best].gain)) best = i;
+    d.lines.push_back(fmt::format("cause: none. No candidate removes {} of the held-out residual and beats its placebo "
+                                  "by {} points{}",
+                                  percent(o.min_gain), 100 * o.margin,
+                                  best < d.verdicts.size()
+                                      ? fmt::format(" (the best, {}, removes {}, interval {} .. {})", d.verdicts[best].name,
+                                                    percent(d.verdicts[best].gain), percent(d.verdicts[best].gain_low),
+                                                    percent(d.verdicts[best].gain_high))
+                                      : ""));
+  } else {
+    const CandidateVerdict& v = d.verdicts[named[0]];
+    const FittedModel& m = d.candidates[named[0]];
+    d.lines.push_back(fmt::format("cause: {}. Modelling it removes {} of the held-out residual (90 % interval {} .. {}; "
+                                  "a placebo of as many parameters: {})",
+                                  v.name, percent(v.gain), percent(v.gain_low), percent(v.gain_high),
+                                  percent(v.placebo_gain)));
+    std::string extras;
+    for (size_t i = 0; i < m.names.size(); ++i)
+      if (!base_values.count(m.names[i]))
+        extras += fmt::format("{}{} = {:.4g}{}", extras.empty() ? "" : ", ", m.names[i], m.values[Eigen::Index(i)],
+                              parameter_unit(m.names[i]) == "1" ? "" : " " + parameter_unit(m.names[i]));
+    if (!extras.empty()) d.lines.push_back("fitted: " + extras);
+  }
+  for (const auto& [a, b] : d.confounded)
+    d.lines.push_back(fmt::format("{} or {}: indistinguishable with this data", a, b));
+  for (size_t i = 0; i < d.candidates.size(); ++i) {
+    const FittedModel& m = d.candidates[i];
+    if (m.failed) continue;
+    for (size_t k = 0; k < m.names.size(); ++k) {
+      const auto b = base_values.find(m.names[k]);
+      if (b == base_values.end() || b->second == 0) continue;
+      const double after = m.values[Eigen::Index(k)], change = after / b->second - 1;
+      if (std::abs(change) < 0.1) continue;
+      const std::string w = fmt::format("{} moves from {:.4g} to {:.4g} {} ({:+.0f} %) once {} is modelled", m.names[k],
+                                        b->second, after, parameter_unit(m.names[k]), 100 * change, m.name);
+      d.verdicts[i].warnings.push_back(w);
+      if (d.cause == m.name) d.lines.push_back(w);
+    }
+  }
+  d.seconds = seconds_since(t0);
+  return d;
+}
+
+nlohmann::json diagnosis_json(const Diagnosis& d) {
+  auto named = [](const FittedModel& m, bool extra_only, const std::map<std::string, double>* base) {
+    nlohmann::json j = nlohmann::json::object();
+    for (size_t i = 0; i < m.names.size() && i < size_t(m.values.size()); ++i)
+      if (!extra_only || !base->count(m.names[i])) j[m.names[i]] = m.values[Eigen::Index(i)];
+    return j;
+  };
+  const std::map<std::string, double> base = values_by_name(d.base);
+  nlohmann::json j;
+  j["cause"] = d.cause;
+  j["heldin_frames"] = d.heldin_frames;
+  j["heldout_frames"] = d.heldout_frames;
+  j["heldout_from_s"] = d.heldout_from;
+  j["base"] = {{"parameters", named(d.base, false, nullptr)},
+               {"heldin_cost", d.base.heldin_cost},
+               {"heldout_cost", d.base.heldout_cost},
+               {"seconds", d.base.seconds}};
+  nlohmann::json candidates = nlohmann::json::array();
+  for (size_t i = 0; i < d.candidates.size(); ++i) {
+    const FittedModel& m = d.candidates[i];
+    const CandidateVerdict& v = d.verdicts[i];
+    nlohmann::json c;
+    c["name"] = v.name;
+    c["fitted"] = !m.failed;
+    if (!m.failed) {
+      c["heldout_before"] = d.base.heldout_cost;
+      c["heldout_after"] = m.heldout_cost;
+      c["heldin_after"] = m.heldin_cost;
+      c["gain"] = v.gain;
+      c["gain_low"] = v.gain_low;
+      c["gain_high"] = v.gain_high;
+      c["placebo_gain"] = v.placebo_gain;
+      c["passes"] = v.passes;
+      c["extra_parameters"] = named(m, true, &base);
+      nlohmann::json before = nlohmann::json::object(), after = nlohmann::json::object();
+      for (size_t k = 0; k < m.names.size(); ++k)
+        if (base.count(m.names[k])) before[m.names[k]] = base.at(m.names[k]), after[m.names[k]] = m.values[Eigen::Index(k)];
+      c["base_before"] = before;
+      c["base_after"] = after;
+      c["seconds"] = m.seconds;
+    } else {
+      c["passes"] = false;
+    }
+    c["score"] = std::isnan(v.score) ? nlohmann::json(nullptr) : nlohmann::json(v.score);
+    c["warnings"] = v.warnings;
+    candidates.push_back(c);
+  }
+  j["candidates"] = candidates;
+  nlohmann::json placebos = nlohmann::json::array();
+  for (const FittedModel& p : d.placebos)
+    placebos.push_back({{"name", p.name},
+                        {"parameters", named(p, true, &base)},
+                        {"heldout_cost", p.failed ? nlohmann::json(nullptr) : nlohmann::json(p.heldout_cost)}});
+  j["placebos"] = placebos;
+  j["confounded"] = nlohmann::json::array();
+  for (const auto& [a, b] : d.confounded) j["confounded"].push_back({a, b});
+  j["lines"] = d.lines;
+  j["seconds"] = d.seconds;
+  return j;
+}
+
+}  // namespace ssc

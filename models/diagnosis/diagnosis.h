@@ -1,0 +1,95 @@
+// `ssc diagnose`: which effect is the fitted model missing?
+//
+// The observed frames are split in time: the first part is held in (fitted), the rest held
+// out (leave-future-out). The base model (the scene, the --fit parameters) is fitted on the
+// held-in frames; so is each candidate extension (the base parameters plus the extension's
+// own; the same starts for the base parameters, the same iterations), and a placebo of the
+// same number of extra parameters that stand for no missing effect (initial velocity
+// components the base leaves alone). Each fitted model then predicts the held-out frames; a candidate's gain is the
+// fraction of the base model's held-out cost (J_SSC) it removes, with a moving-block
+// bootstrap interval over the held-out frames. A candidate is named when its gain is at
+// least `min_gain` and its interval's lower end beats its placebo's gain by `margin`; the
+// cause is the named candidate with the largest gain, or "none". Two named candidates whose
+// gains differ by less than their difference's interval are reported as confounded.
+// Before the fits, a score test ranks the candidates that have parameters with an "off"
+// value: the held-in cost's gradient at the base fit with the extension at off (friction,
+// air drag, a stiffness gradient: one backward pass for all), as the cost decrease it
+// predicts for a typical amount of the effect.
+#pragma once
+#include <Eigen/Core>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "models/sim/problem.h"
+
+namespace ssc {
+
+inline const std::vector<std::string>& diagnosis_candidate_names() {
+  static const std::vector<std::string> names = {"friction", "heterogeneous_stiffness", "second_plane",
+                                                 "nonlinear_material", "air_drag"};
+  return names;
+}
+
+struct DiagnosisOptions {
+  std::vector<std::string> fit = {"youngs_modulus"};  // the base model's fitted parameters
+  std::vector<std::string> candidates = diagnosis_candidate_names();
+  int starts = 8, iterations = 30;
+  std::uint64_t seed = 1;
+  std::string optimizer = "rprop";
+  std::string device = "cpu";
+  double holdout = 0.3;     // the last fraction of the frames, held out
+  double min_gain = 0.2;    // of the base model's held-out cost
+  double margin = 0.05;     // over the placebo's gain
+  int bootstrap = 2000;
+};
+
+// One fitted model (the base, a candidate or a placebo).
+struct FittedModel {
+  std::string name;
+  Problem problem;                       // the model's scene (with the extension on), all frames
+  std::vector<std::string> names;        // fitted parameters
+  Eigen::VectorXd values;                // their fitted values
+  std::vector<std::string> extra;        // the extension's own parameters (a subset of names)
+  std::vector<double> frame_costs;       // every frame's J_SSC term at the fit
+  double heldin_cost = 0, heldout_cost = 0;
+  bool failed = false;
+  std::string failure, note;
+  double seconds = 0;
+};
+
+struct CandidateVerdict {
+  std::string name;
+  double gain = 0, gain_low = 0, gain_high = 0;  // fraction of the base's held-out cost removed
+  double placebo_gain = 0;
+  double score = std::numeric_limits<double>::quiet_NaN();  // predicted relative held-in decrease
+  bool passes = false;
+  std::vector<std::string> warnings;
+};
+
+struct Diagnosis {
+  int heldin_frames = 0, heldout_frames = 0;
+  double heldout_from = 0;  // time of the first held-out frame, s
+  FittedModel base;
+  std::vector<FittedModel> candidates, placebos;  // placebos by extra-parameter count 1, 2, 3
+  std::vector<CandidateVerdict> verdicts;         // one per candidate, in the order fitted
+  std::string cause = "none";
+  std::vector<std::pair<std::string, std::string>> confounded;
+  std::vector<std::string> lines;  // what to tell the user
+  double seconds = 0;
+};
+
+using DiagnosisProgress = std::function<void(const std::string& what)>;
+
+// problem: the scene and observations as loaded for the base fit (load_problem with
+// options.fit); scene_path and overrides: to reload the scene with each extension's keys.
+Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>& overrides,
+                   const std::string& observations, double phi_max, const DiagnosisOptions& options,
+                   const DiagnosisProgress& progress = {});
+
+nlohmann::json diagnosis_json(const Diagnosis& d);
+
+}  // namespace ssc

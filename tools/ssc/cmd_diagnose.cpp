@@ -1,0 +1,126 @@
+// `ssc diagnose SCENE --observations DIR --out OUT [--fit LIST] [--candidates LIST]
+// [--starts N] [--iterations K] [--holdout F] [--device ...]`: fits the base model and each
+// candidate extension on the first frames, scores them on the held-out rest
+// (models/diagnosis/diagnosis.h), and writes diagnosis.json, report.html and the residuals of
+// the base fit and of the named extension's.
+#include <fmt/format.h>
+
+#include <nlohmann/json.hpp>
+
+#include "models/diagnosis/diagnosis.h"
+#include "models/diagnosis/report_data.h"
+#include "models/diagnosis/report_html.h"
+#include "models/diagnosis/residuals.h"
+#include "models/io/folder_hash.h"
+#include "models/io/output_dir.h"
+#include "models/io/run_record.h"
+#include "models/io/text_file.h"
+#include "models/sim/parameters.h"
+#include "runtime/cuda_runtime.h"
+#include "runtime/errors.h"
+#include "tools/ssc/commands.h"
+#include "tools/ssc/device_option.h"
+
+namespace ssc {
+namespace {
+
+PhysicalParameters fitted_parameters(const FittedModel& m) {
+  PhysicalParameters p = PhysicalParameters::from_scene(m.problem.scene);
+  for (size_t i = 0; i < m.names.size(); ++i) set_parameter(p, m.names[i], m.values[Eigen::Index(i)]);
+  return p;
+}
+
+nlohmann::json report_data(const Diagnosis& d, const nlohmann::json& dj, const std::string& scene,
+                           const std::string& observations, const std::string& device) {
+  nlohmann::json data;
+  data["title"] = "ssc diagnose: " + scene;
+  data["cause"] = d.cause;
+  data["summary_lines"] = d.lines;
+  data["provenance"] = {{"scene", scene}, {"observations", observations}, {"device", device}};
+  data["candidates"] = dj["candidates"];
+  data["confounded"] = dj["confounded"];
+  nlohmann::json units = nlohmann::json::object(), base = dj["base"]["parameters"], winner = nlohmann::json::object();
+  for (const auto& [name, value] : base.items()) units[name] = parameter_unit(name);
+  for (const FittedModel& m : d.candidates)
+    if (m.name == d.cause)
+      for (size_t i = 0; i < m.names.size(); ++i) {
+        winner[m.names[i]] = m.values[Eigen::Index(i)];
+        units[m.names[i]] = parameter_unit(m.names[i]);
+      }
+  data["parameters"] = {{"units", units}, {"base", base}, {"winner", winner}};
+  return data;
+}
+
+}  // namespace
+
+Command register_diagnose(CLI::App& app) {
+  struct Options {
+    std::string scene, observations, out, device = "auto";
+    std::vector<std::string> overrides;
+    DiagnosisOptions d;
+    double phi_max = 0;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* sub = app.add_subcommand("diagnose", "Name the effect the fitted model misses, fit it, measure the gain");
+  sub->add_option("scene", o->scene, "Scene file (what is known)")->required();
+  sub->add_option("--observations", o->observations, "Observation folder")->required();
+  sub->add_option("--out", o->out, "Output folder (replaced atomically)")->required();
+  sub->add_option("--fit", o->d.fit, "The base model's parameters to fit, comma-separated (default youngs_modulus)")
+      ->delimiter(',');
+  sub->add_option("--candidates", o->d.candidates,
+                  "Extensions to try, comma-separated (default: friction, heterogeneous_stiffness, second_plane, "
+                  "nonlinear_material, air_drag)")
+      ->delimiter(',');
+  sub->add_option("--starts", o->d.starts, "Starts per fit")->check(CLI::Range(1, 1000));
+  sub->add_option("--iterations", o->d.iterations, "Iterations per start")->check(CLI::Range(1, 100000));
+  sub->add_option("--holdout", o->d.holdout, "Fraction of the frames held out at the end (default 0.3)");
+  sub->add_option("--seed", o->d.seed, "Seed of the starts and the bootstrap");
+  sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
+  sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
+  add_device_option(sub, &o->device);
+  return [o] {
+    DiagnosisOptions opt = o->d;
+    opt.device = choose_device(o->device);
+    OutputDir out(o->out, {o->scene, o->observations});
+    out.manifest()["scene"] = {{"file", o->scene}};
+    out.manifest()["observations"] = folder_fingerprint(o->observations);
+    const std::string device = opt.device == "cuda" ? gpu_description() : "cpu";
+    out.manifest()["device"] = device;
+    const Diagnosis d = diagnose(o->scene, o->overrides, o->observations, o->phi_max, opt,
+                                 [](const std::string& what) { std::fprintf(stderr, "diagnose: fitting %s\n", what.c_str()); });
+    nlohmann::json dj = diagnosis_json(d);
+    dj["device"] = device;
+    dj["options"] = {{"fit", opt.fit},           {"candidates", opt.candidates}, {"starts", opt.starts},
+                     {"iterations", opt.iterations}, {"holdout", opt.holdout},   {"seed", opt.seed},
+                     {"min_gain", opt.min_gain}, {"margin", opt.margin}};
+    dj["warnings"] = warnings_json();
+    // Residuals of the base fit, and of the named extension's (else of none).
+    const Residuals before = compute_residuals(d.base.problem, fitted_parameters(d.base));
+    const FittedModel* winner = nullptr;
+    for (const FittedModel& m : d.candidates)
+      if (m.name == d.cause && !m.failed) winner = &m;
+    Residuals after;
+    if (winner) after = compute_residuals(winner->problem, fitted_parameters(*winner));
+    write_text_file(out.file("residuals_base.csv"), residuals_csv(before));
+    dj["residuals_base"] = residual_summary(before);
+    if (winner) {
+      write_text_file(out.file("residuals_" + d.cause + ".csv"), residuals_csv(after));
+      dj["residuals_" + d.cause] = residual_summary(after);
+    }
+    nlohmann::json data = report_data(d, dj, o->scene, o->observations, device);
+    add_residual_report_data(data, d.base.problem, before, winner ? &after : nullptr);
+    data["residual_vs_time"]["heldout_from"] = d.heldout_from;
+    write_text_file(out.file("diagnosis.json"), dj.dump(2) + "\n");
+    write_report_html(out.file("report.html"), data);
+    out.commit();
+    std::printf("%-24s %10s %22s %9s %9s\n", "candidate", "gain", "90 % interval", "placebo", "score");
+    for (const CandidateVerdict& v : d.verdicts)
+      std::printf("%-24s %9.1f%% %9.1f%% .. %6.1f%% %8.1f%% %9.3g%s\n", v.name.c_str(), 100 * v.gain, 100 * v.gain_low,
+                  100 * v.gain_high, 100 * v.placebo_gain, v.score, v.passes ? "  named" : "");
+    for (const std::string& line : d.lines) std::printf("%s\n", line.c_str());
+    std::printf("wrote %s: diagnosis.json, report.html, residuals (%.1f s)\n", o->out.c_str(), d.seconds);
+    return 0;
+  };
+}
+
+}  // namespace ssc

@@ -1,0 +1,83 @@
+// `ssc residuals SCENE --observations DIR --params result.json --out OUT`: where the fitted
+// simulation disagrees with the observations (models/diagnosis/residuals.h): residuals.csv
+// (one row per observed point), residuals.json (by frame, phase, region, direction),
+// residual_vs_time.svg and report.html (residual images per camera, on the rest shape).
+#include <fmt/format.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "models/diagnosis/report_data.h"
+#include "models/diagnosis/report_html.h"
+#include "models/diagnosis/residuals.h"
+#include "models/io/folder_hash.h"
+#include "models/io/output_dir.h"
+#include "models/io/svg_plot.h"
+#include "models/io/text_file.h"
+#include "models/sim/problem.h"
+#include "runtime/errors.h"
+#include "tools/ssc/commands.h"
+#include "tools/ssc/fitted_parameters.h"
+
+namespace ssc {
+
+void write_residual_plot(const std::string& path, const Residuals& before, const Residuals* after) {
+  PlotPanel p{"RMS residual of the matched points per frame", "time [s]", "residual [mm]", false, false, true, {}, {}};
+  PlotSeries b{"fit", {}, {}, "#1f77b4", 2.0, true};
+  for (const FrameResiduals& f : before.frames) b.x.push_back(f.time), b.y.push_back(1e3 * f.rms);
+  p.series.push_back(b);
+  if (after) {
+    PlotSeries a{"after", {}, {}, "#d62728", 2.0, true};
+    for (const FrameResiduals& f : after->frames) a.x.push_back(f.time), a.y.push_back(1e3 * f.rms);
+    p.series.push_back(a);
+  }
+  p.vertical_lines = before.contact_times;
+  write_svg_plot(path, {p});
+}
+
+Command register_residuals(CLI::App& app) {
+  struct Options {
+    std::string scene, observations, params, out;
+    std::vector<std::string> overrides;
+    double phi_max = 0;
+  };
+  auto o = std::make_shared<Options>();
+  CLI::App* sub = app.add_subcommand("residuals", "Where a fitted simulation disagrees with the observations");
+  sub->add_option("scene", o->scene, "Scene file")->required();
+  sub->add_option("--observations", o->observations, "Observation folder")->required();
+  sub->add_option("--params", o->params, "result.json of ssc reconstruct (its \"set\" list is applied)");
+  sub->add_option("--out", o->out, "Output folder (replaced atomically)")->required();
+  sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
+  sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
+  return [o] {
+    const FittedParameters fitted = read_fitted_parameters(o->params);
+    std::vector<std::string> overrides = o->overrides;
+    overrides.insert(overrides.end(), fitted.set.begin(), fitted.set.end());
+    const Problem problem = load_problem(o->scene, overrides, o->observations, o->phi_max, fitted.names);
+    OutputDir out(o->out, {o->scene, o->observations, o->params, problem.scene.object.path});
+    out.manifest()["scene"] = {{"file", o->scene}, {"resolved", problem.scene.resolved}};
+    out.manifest()["observations"] = folder_fingerprint(o->observations);
+    if (!o->params.empty()) out.manifest()["params"] = {{"file", o->params}, {"set", fitted.set}};
+    const Residuals r = compute_residuals(problem, PhysicalParameters::from_scene(problem.scene));
+    const nlohmann::json summary = residual_summary(r);
+    write_text_file(out.file("residuals.csv"), residuals_csv(r));
+    write_text_file(out.file("residuals.json"), summary.dump(2) + "\n");
+    write_residual_plot(out.file("residual_vs_time.svg"), r, nullptr);
+    nlohmann::json data;
+    data["title"] = "ssc residuals: " + o->scene;
+    data["provenance"] = {{"scene", o->scene}, {"observations", o->observations}, {"params", o->params}};
+    add_residual_report_data(data, problem, r, nullptr);
+    write_report_html(out.file("report.html"), data);
+    out.commit();
+    const nlohmann::json& all = summary["all"];
+    std::printf("%d of %d observed points matched (%.1f %%); RMS residual %.3g mm\n", all["matched"].get<int>(),
+                all["points"].get<int>(), 100 * all["matched_fraction"].get<double>(), 1e3 * all["rms_m"].get<double>());
+    for (const auto& [phase, a] : summary["by_phase"].items())
+      std::printf("  %-22s %6d points, %5.1f %% matched, RMS %.3g mm\n", phase.c_str(), a["points"].get<int>(),
+                  100 * a["matched_fraction"].get<double>(), 1e3 * a["rms_m"].get<double>());
+    std::printf("wrote %s: residuals.csv, residuals.json, residual_vs_time.svg, report.html\n", o->out.c_str());
+    return 0;
+  };
+}
+
+}  // namespace ssc
