@@ -57,9 +57,10 @@ std::string region_name(int region) {
   return fmt::format("{}x{}y{}z", region & 1 ? '+' : '-', region & 2 ? '+' : '-', region & 4 ? '+' : '-');
 }
 
-Residuals compute_residuals(const Problem& problem, const PhysicalParameters& params) {
+Residuals compute_residuals(const Problem& problem, const PhysicalParameters& params, const std::string& device) {
   Residuals r;
   Simulation sim(problem.scene, problem.grid, 1, true);
+  if (device == "cuda") sim.use_gpu();
   sim.set_parameters(0, params);
   r.rest_centre = sim.center_of_mass(0);
   const SurfaceConstraintCost cost(problem.grid, problem.phi_max);

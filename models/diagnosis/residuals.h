@@ -44,8 +44,9 @@ struct Residuals {
   std::vector<double> contact_times;  // times at which a contact with a plane begins
 };
 
-// Simulates the problem's scene with `params` and measures every observed frame.
-Residuals compute_residuals(const Problem& problem, const PhysicalParameters& params);
+// Simulates the problem's scene with `params` (on the GPU for device "cuda") and measures
+// every observed frame.
+Residuals compute_residuals(const Problem& problem, const PhysicalParameters& params, const std::string& device = "cpu");
 
 // The aggregates as JSON: matched fraction, RMS and mean residual (metres) by frame, phase,
 // region and direction.

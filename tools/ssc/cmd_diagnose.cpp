@@ -95,12 +95,12 @@ Command register_diagnose(CLI::App& app) {
                      {"min_gain", opt.min_gain}, {"margin", opt.margin}};
     dj["warnings"] = warnings_json();
     // Residuals of the base fit, and of the named extension's (else of none).
-    const Residuals before = compute_residuals(d.base.problem, fitted_parameters(d.base));
+    const Residuals before = compute_residuals(d.base.problem, fitted_parameters(d.base), opt.device);
     const FittedModel* winner = nullptr;
     for (const FittedModel& m : d.candidates)
       if (m.name == d.cause && !m.failed) winner = &m;
     Residuals after;
-    if (winner) after = compute_residuals(winner->problem, fitted_parameters(*winner));
+    if (winner) after = compute_residuals(winner->problem, fitted_parameters(*winner), opt.device);
     write_text_file(out.file("residuals_base.csv"), residuals_csv(before));
     dj["residuals_base"] = residual_summary(before);
     if (winner) {

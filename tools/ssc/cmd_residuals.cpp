@@ -16,30 +16,33 @@
 #include "models/io/text_file.h"
 #include "models/sim/problem.h"
 #include "runtime/errors.h"
+#include "runtime/cuda_runtime.h"
 #include "tools/ssc/commands.h"
+#include "tools/ssc/device_option.h"
 #include "tools/ssc/fitted_parameters.h"
 
 namespace ssc {
+namespace {
 
-void write_residual_plot(const std::string& path, const Residuals& before, const Residuals* after) {
-  PlotPanel p{"RMS residual of the matched points per frame", "time [s]", "residual [mm]", false, false, true, {}, {}};
-  PlotSeries b{"fit", {}, {}, "#1f77b4", 2.0, true};
-  for (const FrameResiduals& f : before.frames) b.x.push_back(f.time), b.y.push_back(1e3 * f.rms);
-  p.series.push_back(b);
-  if (after) {
-    PlotSeries a{"after", {}, {}, "#d62728", 2.0, true};
-    for (const FrameResiduals& f : after->frames) a.x.push_back(f.time), a.y.push_back(1e3 * f.rms);
-    p.series.push_back(a);
-  }
-  p.vertical_lines = before.contact_times;
+// The RMS residual per frame, contact events as vertical lines.
+void write_residual_plot(const std::string& path, const Residuals& r) {
+  PlotPanel p{"RMS residual of the matched points per frame (lines: contacts begin)", "time [s]", "residual [mm]",
+              false, false, true, {}, {}};
+  PlotSeries s{"fit", {}, {}, "#1f77b4", 2.0, true};
+  for (const FrameResiduals& f : r.frames) s.x.push_back(f.time), s.y.push_back(1e3 * f.rms);
+  p.series.push_back(s);
+  p.vertical_lines = r.contact_times;
   write_svg_plot(path, {p});
 }
+
+}  // namespace
 
 Command register_residuals(CLI::App& app) {
   struct Options {
     std::string scene, observations, params, out;
     std::vector<std::string> overrides;
     double phi_max = 0;
+    std::string device = "auto";
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand("residuals", "Where a fitted simulation disagrees with the observations");
@@ -49,7 +52,9 @@ Command register_residuals(CLI::App& app) {
   sub->add_option("--out", o->out, "Output folder (replaced atomically)")->required();
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
+  add_device_option(sub, &o->device);
   return [o] {
+    const std::string device = choose_device(o->device);
     const FittedParameters fitted = read_fitted_parameters(o->params);
     std::vector<std::string> overrides = o->overrides;
     overrides.insert(overrides.end(), fitted.set.begin(), fitted.set.end());
@@ -58,11 +63,12 @@ Command register_residuals(CLI::App& app) {
     out.manifest()["scene"] = {{"file", o->scene}, {"resolved", problem.scene.resolved}};
     out.manifest()["observations"] = folder_fingerprint(o->observations);
     if (!o->params.empty()) out.manifest()["params"] = {{"file", o->params}, {"set", fitted.set}};
-    const Residuals r = compute_residuals(problem, PhysicalParameters::from_scene(problem.scene));
+    out.manifest()["device"] = device == "cuda" ? gpu_description() : "cpu";
+    const Residuals r = compute_residuals(problem, PhysicalParameters::from_scene(problem.scene), device);
     const nlohmann::json summary = residual_summary(r);
     write_text_file(out.file("residuals.csv"), residuals_csv(r));
     write_text_file(out.file("residuals.json"), summary.dump(2) + "\n");
-    write_residual_plot(out.file("residual_vs_time.svg"), r, nullptr);
+    write_residual_plot(out.file("residual_vs_time.svg"), r);
     nlohmann::json data;
     data["title"] = "ssc residuals: " + o->scene;
     data["provenance"] = {{"scene", o->scene}, {"observations", o->observations}, {"params", o->params}};

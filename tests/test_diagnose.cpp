@@ -1,0 +1,158 @@
+// `ssc residuals` and `ssc diagnose` through the command line, as a user runs them:
+//  - residuals of a cube thrown onto the ground with friction 0.4: at the true parameters they
+//    are the depth noise (1 mm) everywhere; without friction they grow after the landing, and
+//    the phases say where;
+//  - diagnose names friction hidden in data made with half the fit's time step, and says
+//    "none" for clean data made with half the fit's time step (the base model never matches
+//    exactly, as with a real recording);
+//  - bad input (a missing or malformed --params, an unknown candidate) is an input error that
+//    writes nothing.
+// The benchmark of every effect and strength is tools/diagnosis-benchmark.sh (docs/diagnosis.md).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "tests/cli_test_folder.h"
+
+namespace ssc {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+// A 0.2 m cube thrown from 0.45 m at 1.5 m/s across, landing at about 0.3 s and sliding.
+json cube_scene(double dt, double friction, double youngs, bool observation) {
+  json j;
+  j["object"] = {{"primitive", "box"}, {"half_extents", {0.1, 0.1, 0.1}}, {"position", {0, 0.45, 0}}};
+  j["grid"] = {{"cell_size", 0.05}};
+  j["material"] = {{"youngs_modulus", youngs}, {"poisson_ratio", 0.3}, {"density", 200}, {"mass_damping", 0.0},
+                   {"stiffness_damping", 0.005}};
+  j["initial"] = {{"linear_velocity", {1.5, 0.5, 0}}};
+  j["ground"] = {{"stiffness", 1e5}, {"softmin_alpha", 300}};
+  if (friction > 0) j["ground"]["friction"] = friction;
+  j["time"] = {{"dt", dt}, {"steps", int(std::round(0.8 / dt))}, {"theta", 0.6}};
+  j["solver"] = {{"contact", "implicit"}};
+  if (observation)
+    j["observation"] = {{"every", int(std::round(0.04 / dt))},
+                        {"noise", 0.001},
+                        {"seed", 7},
+                        {"cameras",
+                         {{{"name", "cam"}, {"width", 64}, {"height", 48}, {"eye", {0.6, 0.6, 1.8}},
+                           {"target", {0.6, 0.2, 0}}, {"fov_deg", 55}}}}};
+  return j;
+}
+
+class DiagnoseCli : public CliTestFolder {
+ protected:
+  DiagnoseCli() : CliTestFolder("ssc-diagnose-") {}
+  void observe(const json& scene, const std::string& name) {
+    std::string out, err;
+    const std::string path = write(name + ".json", scene);
+    ASSERT_EQ(run("observe '" + path + "' --out '" + (dir_ / name).string() + "' --device cpu --quiet", &out, &err), 0)
+        << err;
+  }
+  json diagnose(const json& fit, const std::string& observations, const std::string& out_name) {
+    std::string out, err;
+    const std::string path = write("fit.json", fit);
+    const int code = run("diagnose '" + path + "' --observations '" + (dir_ / observations).string() + "' --out '" +
+                             (dir_ / out_name).string() + "' --starts 3 --iterations 15 --device cpu",
+                         &out, &err);
+    std::printf("%s", out.c_str());
+    EXPECT_EQ(code, 0) << err;
+    return code == 0 ? read_json(dir_ / out_name / "diagnosis.json") : json();
+  }
+};
+
+TEST_F(DiagnoseCli, ResidualsAreTheNoiseAtTheTruthAndGrowWhereTheModelMissesFriction) {
+  observe(cube_scene(0.01, 0.4, 5e4, true), "obs");
+  const std::string truth = write("truth.json", json{{"parameters", {{"ground.friction", 0.4}}},
+                                                     {"set", {"ground.friction=0.4"}}});
+  const std::string scene = write("scene.json", cube_scene(0.01, 0.0, 5e4, false));
+  std::string out, err;
+  ASSERT_EQ(run("residuals '" + scene + "' --observations '" + (dir_ / "obs").string() + "' --params '" + truth +
+                    "' --out '" + (dir_ / "at_truth").string() + "' --device cpu",
+                &out, &err),
+            0)
+      << err;
+  std::printf("%s", out.c_str());
+  ASSERT_EQ(run("residuals '" + scene + "' --observations '" + (dir_ / "obs").string() + "' --out '" +
+                    (dir_ / "no_friction").string() + "' --device cpu",
+                &out, &err),
+            0)
+      << err;
+  std::printf("%s", out.c_str());
+  const json truth_summary = read_json(dir_ / "at_truth" / "residuals.json");
+  const json wrong = read_json(dir_ / "no_friction" / "residuals.json");
+  for (const char* f : {"residuals.csv", "residuals.json", "residual_vs_time.svg", "report.html"})
+    EXPECT_TRUE(fs::exists(dir_ / "at_truth" / f)) << f;
+  // One CSV row per observed point.
+  std::ifstream csv(dir_ / "at_truth" / "residuals.csv");
+  int rows = -1;
+  for (std::string line; std::getline(csv, line);) ++rows;
+  EXPECT_EQ(rows, truth_summary["all"]["points"].get<int>());
+  const double rms_truth = truth_summary["all"]["rms_m"], rms_wrong = wrong["all"]["rms_m"];
+  std::printf("RMS residual: %.3f mm at the truth, %.3f mm without friction\n", 1e3 * rms_truth, 1e3 * rms_wrong);
+  EXPECT_GT(truth_summary["all"]["matched_fraction"].get<double>(), 0.95);
+  EXPECT_LT(rms_truth, 0.002);  // the 1 mm depth noise, seen along the surface normal
+  EXPECT_GT(rms_wrong, 3 * rms_truth);
+  EXPECT_TRUE(truth_summary["by_phase"].contains("flight"));
+  EXPECT_TRUE(truth_summary["by_phase"].contains("contact with plane 0"));
+  EXPECT_FALSE(truth_summary["contact_times_s"].empty());
+  // Without friction the disagreement is in contact, not in flight.
+  EXPECT_LT(wrong["by_phase"]["flight"]["rms_m"].get<double>(), 2 * rms_truth);
+  EXPECT_GT(wrong["by_phase"]["contact with plane 0"]["rms_m"].get<double>(), 3 * rms_truth);
+}
+
+TEST_F(DiagnoseCli, NamesFrictionHiddenInDataFromASmallerTimeStep) {
+  observe(cube_scene(0.005, 0.4, 5e4, true), "obs");
+  const json d = diagnose(cube_scene(0.01, 0.0, 1.25e5, false), "obs", "diag");
+  ASSERT_FALSE(d.is_null());
+  EXPECT_EQ(d["cause"], "friction");
+  const std::string html = [&] {
+    std::ifstream in(dir_ / "diag" / "report.html");
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }();
+  EXPECT_NE(html.find("friction"), std::string::npos);
+  EXPECT_NE(html.find("<svg"), std::string::npos);
+  EXPECT_TRUE(fs::exists(dir_ / "diag" / "residuals_friction.csv"));
+}
+
+TEST_F(DiagnoseCli, SaysNoneForCleanDataFromASmallerTimeStep) {
+  observe(cube_scene(0.005, 0.0, 5e4, true), "obs");
+  const json d = diagnose(cube_scene(0.01, 0.0, 1.25e5, false), "obs", "diag");
+  ASSERT_FALSE(d.is_null());
+  EXPECT_EQ(d["cause"], "none");
+}
+
+TEST_F(DiagnoseCli, BadInputIsAnInputErrorAndWritesNothing) {
+  observe(cube_scene(0.01, 0.0, 5e4, true), "obs");
+  const std::string scene = write("scene.json", cube_scene(0.01, 0.0, 5e4, false));
+  const std::string malformed = write("bad.json", json{{"parameters", 3}});
+  std::string out, err;
+  for (const std::string& params : {(dir_ / "missing.json").string(), malformed}) {
+    EXPECT_EQ(run("residuals '" + scene + "' --observations '" + (dir_ / "obs").string() + "' --params '" + params +
+                      "' --out '" + (dir_ / "r").string() + "' --device cpu",
+                  &out, &err),
+              2)
+        << err;
+    EXPECT_NE(err.find(params), std::string::npos) << err;
+  }
+  EXPECT_EQ(run("diagnose '" + scene + "' --observations '" + (dir_ / "obs").string() + "' --candidates frition --out '" +
+                    (dir_ / "d").string() + "' --device cpu",
+                &out, &err),
+            2);
+  EXPECT_NE(err.find("unknown candidate 'frition'"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(dir_ / "r"));
+  EXPECT_FALSE(fs::exists(dir_ / "d"));
+}
+
+}  // namespace
+}  // namespace ssc

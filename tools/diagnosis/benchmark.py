@@ -1,0 +1,149 @@
+#!/usr/bin/env python3
+"""The diagnosis benchmark (tools/diagnosis-benchmark.sh): observations made with one effect
+switched on (two strengths) or none, partly with another discretisation than the fit's; each
+diagnosed by `ssc diagnose` from a scene without the effect. Prints a table and writes the
+results as JSON; --markdown PATH fills the generated part of docs/diagnosis.md."""
+import argparse, copy, json, os, subprocess, sys, time
+
+def cube(pos, vel, half=0.1, cell=0.05, E=5e4):
+    return {"object": {"primitive": "box", "half_extents": [half, half, half], "position": pos},
+            "grid": {"cell_size": cell},
+            "material": {"youngs_modulus": E, "poisson_ratio": 0.3, "density": 200, "mass_damping": 0.0,
+                         "stiffness_damping": 0.005},
+            "initial": {"linear_velocity": vel},
+            "ground": {"stiffness": 1e5, "softmin_alpha": 300},
+            "time": {"dt": 0.01, "steps": 80, "theta": 0.6},
+            "solver": {"contact": "implicit"}}
+
+def sphere(pos, vel, radius=0.1, cell=0.05, E=5e4):
+    s = cube(pos, vel, cell=cell, E=E)
+    s["object"] = {"primitive": "sphere", "radius": radius, "position": pos}
+    return s
+
+def camera(eye, target):
+    return {"every": 4, "noise": 0.001, "seed": 7,
+            "cameras": [{"name": "cam", "width": 64, "height": 48, "eye": eye, "target": target, "fov_deg": 55}]}
+
+def finer(scene):  # another discretisation: half the time step (observed at the same times)
+    s = copy.deepcopy(scene)
+    s["time"]["dt"] /= 2
+    s["time"]["steps"] *= 2
+    if "observation" in s:
+        s["observation"]["every"] *= 2
+    return s
+
+def finer_grid(scene):
+    s = copy.deepcopy(scene)
+    s["grid"]["cell_size"] /= 2
+    return s
+
+def case(name, effect, strength, data, fit, cross=False):
+    return {"name": name, "effect": effect, "strength": strength, "data": data, "fit": fit, "cross": cross}
+
+def cases():
+    out = []
+    # friction: a cube thrown from 0.45 m, landing and sliding
+    base = cube([0, 0.45, 0], [1.5, 0.5, 0]); base["observation"] = camera([0.6, 0.6, 1.8], [0.6, 0.2, 0])
+    for strength, mu in (("subtle", 0.15), ("clear", 0.4)):
+        d = copy.deepcopy(base); d["ground"]["friction"] = mu
+        out.append(case(f"friction {mu}", "friction", strength, finer(d), base, True))
+    # air drag: a sphere thrown up and across, bouncing once
+    base = sphere([0, 0.3, 0], [1.2, 2.0, 0]); base["observation"] = camera([0.5, 0.6, 2.0], [0.5, 0.4, 0])
+    for strength, rho in (("subtle", 8.0), ("clear", 25.0)):
+        d = copy.deepcopy(base); d["air_drag"] = rho
+        out.append(case(f"air drag {rho:g} kg/m^3", "air_drag", strength, finer(d), base, True))
+    # second plane: a cube sliding into a wall at x = 0.5 m
+    base = cube([0, 0.101, 0], [2.0, 0.0, 0]); base["observation"] = camera([0.3, 0.6, 1.6], [0.3, 0.1, 0])
+    for strength, x in (("subtle", 0.75), ("clear", 0.5)):
+        d = copy.deepcopy(base)
+        d["ground"] = {"stiffness": 1e5, "softmin_alpha": 300,
+                       "planes": [{"height": 0.0}, {"angles_deg": [90, 180], "height": -x}]}
+        out.append(case(f"wall at {x} m", "second_plane", strength, finer(d), base, True))
+    # nonlinear material: a soft cube thrown down hard, squashed at the bounce
+    base = cube([0, 0.15, 0], [0.3, -3.0, 0], E=1e4); base["ground"]["stiffness"] = 1e6
+    base["time"] = {"dt": 0.005, "steps": 120, "theta": 0.5}; base["observation"] = camera([0.3, 0.4, 1.2], [0.05, 0.1, 0])
+    base["observation"]["every"] = 6
+    for strength, v in (("subtle", -2.0), ("clear", -3.5)):
+        d = copy.deepcopy(base); d["material"]["model"] = "neo_hookean"; d["initial"]["linear_velocity"][1] = v
+        f = copy.deepcopy(base); f["initial"]["linear_velocity"][1] = v
+        out.append(case(f"Neo-Hookean, thrown at {-v} m/s", "nonlinear_material", strength, d, f))
+    # heterogeneous stiffness: a soft tall box landing tilted; stiffer towards +x
+    base = cube([0, 0.3, 0], [0.5, -1.5, 0], E=1.5e4); base["object"]["half_extents"] = [0.15, 0.1, 0.1]
+    base["initial"]["angular_velocity"] = [0, 0, 3.0]; base["observation"] = camera([0.3, 0.5, 1.6], [0.2, 0.15, 0])
+    for strength, g in (("subtle", 3.0), ("clear", 8.0)):
+        d = copy.deepcopy(base); d["material"]["stiffness_gradient"] = [g, 0, 0]
+        out.append(case(f"stiffness gradient {g:g} 1/m", "heterogeneous_stiffness", strength, d, base))
+    # clean cases: no effect at all, two of them from another discretisation
+    fly = cube([0, 0.45, 0], [1.5, 0.5, 0]); fly["observation"] = camera([0.6, 0.6, 1.8], [0.6, 0.2, 0])
+    ball = sphere([0, 0.3, 0], [1.2, 2.0, 0]); ball["observation"] = camera([0.5, 0.6, 2.0], [0.5, 0.4, 0])
+    out.append(case("clean cube", "none", "-", fly, fly))
+    out.append(case("clean cube, half dt", "none", "-", finer(fly), fly, True))
+    out.append(case("clean sphere", "none", "-", ball, ball))
+    out.append(case("clean sphere, half cells", "none", "-", finer_grid(ball), ball, True))
+    return out
+
+def timing_cases():
+    """The issue's timing case: a 360-step, one-camera sequence (the friction cube at dt 1/450 s)."""
+    base = cube([0, 0.45, 0], [1.5, 0.5, 0]); base["time"] = {"dt": 0.8 / 360, "steps": 360, "theta": 0.6}
+    base["observation"] = camera([0.6, 0.6, 1.8], [0.6, 0.2, 0]); base["observation"]["every"] = 12
+    d = copy.deepcopy(base); d["ground"]["friction"] = 0.4
+    return [case("timing 360 steps", "friction", "clear", d, base)]
+
+def nominal_off(fit):  # the fit's nominal Young's modulus is not the truth
+    f = copy.deepcopy(fit)
+    f["material"]["youngs_modulus"] *= 2.5
+    f.pop("observation", None)
+    return f
+
+def run(cmd, **kw):
+    return subprocess.run(cmd, capture_output=True, text=True, **kw)
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--ssc", required=True)
+    ap.add_argument("--work", required=True)
+    ap.add_argument("--device", default="cpu")
+    ap.add_argument("--starts", type=int, default=4)
+    ap.add_argument("--iterations", type=int, default=20)
+    ap.add_argument("--only", default="")
+    ap.add_argument("--json", default="")
+    ap.add_argument("--timing", action="store_true", help="only the 360-step timing case")
+    a = ap.parse_args()
+    os.makedirs(a.work, exist_ok=True)
+    results = []
+    for c in (timing_cases() if a.timing else cases()):
+        if a.only and a.only not in c["name"]:
+            continue
+        d = os.path.join(a.work, c["name"].replace(" ", "_").replace("/", "_").replace(",", ""))
+        os.makedirs(d, exist_ok=True)
+        data, fit = os.path.join(d, "data.json"), os.path.join(d, "fit.json")
+        json.dump(c["data"], open(data, "w"), indent=1)
+        json.dump(nominal_off(c["fit"]), open(fit, "w"), indent=1)
+        r = run([a.ssc, "observe", data, "--out", os.path.join(d, "obs"), "--device", a.device, "--quiet"])
+        if r.returncode:
+            print(f"{c['name']}: observe failed: {r.stderr.strip()[-300:]}", flush=True)
+            results.append(dict(c, cause="observe failed", data=None, fit=None)); continue
+        t0 = time.time()
+        r = run([a.ssc, "diagnose", fit, "--observations", os.path.join(d, "obs"), "--out", os.path.join(d, "diag"),
+                 "--starts", str(a.starts), "--iterations", str(a.iterations), "--device", a.device])
+        wall = time.time() - t0
+        if r.returncode:
+            print(f"{c['name']}: diagnose failed: {r.stderr.strip()[-300:]}", flush=True)
+            results.append({"name": c["name"], "effect": c["effect"], "strength": c["strength"], "cause": "failed",
+                            "seconds": wall}); continue
+        j = json.load(open(os.path.join(d, "diag", "diagnosis.json")))
+        cand = {x["name"]: x for x in j["candidates"]}
+        winner = cand.get(j["cause"], {})
+        results.append({"name": c["name"], "effect": c["effect"], "strength": c["strength"], "cross": c["cross"],
+                        "cause": j["cause"], "gain": winner.get("gain"), "gain_low": winner.get("gain_low"),
+                        "gain_high": winner.get("gain_high"), "heldout_before": j["base"]["heldout_cost"],
+                        "heldout_after": winner.get("heldout_after"), "confounded": j["confounded"],
+                        "gains": {k: v.get("gain") for k, v in cand.items()}, "seconds": wall, "device": a.device})
+        x = results[-1]
+        print(f"{c['name']:32s} effect {c['effect']:24s} named {j['cause']:24s} "
+              f"gain {x['gain'] if x['gain'] is not None else float('nan'):.2f} {wall:6.1f} s", flush=True)
+    if a.json:
+        json.dump(results, open(a.json, "w"), indent=1)
+
+if __name__ == "__main__":
+    main()
