@@ -5,7 +5,12 @@ diagnosed by `ssc diagnose` from a scene without the effect. Prints a table and 
 results as JSON; --markdown PATH fills the generated part of docs/diagnosis.md."""
 import argparse, copy, json, os, subprocess, sys, time
 
+# Positions are off the grid planes by a few millimetres: a cube whose faces lie on grid planes
+# is, once it tumbles, rendered by `observe` where the cost does not find it (docs/diagnosis.md).
+OFF_GRID = [0.013, 0.0012, 0.007]
+
 def cube(pos, vel, half=0.1, cell=0.05, E=5e4):
+    pos = [p + o for p, o in zip(pos, OFF_GRID)]
     return {"object": {"primitive": "box", "half_extents": [half, half, half], "position": pos},
             "grid": {"cell_size": cell},
             "material": {"youngs_modulus": E, "poisson_ratio": 0.3, "density": 200, "mass_damping": 0.0,
@@ -105,14 +110,14 @@ def main():
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--starts", type=int, default=4)
     ap.add_argument("--iterations", type=int, default=20)
-    ap.add_argument("--only", default="")
+    ap.add_argument("--only", default="", help="comma-separated parts of case names")
     ap.add_argument("--json", default="")
     ap.add_argument("--timing", action="store_true", help="only the 360-step timing case")
     a = ap.parse_args()
     os.makedirs(a.work, exist_ok=True)
     results = []
     for c in (timing_cases() if a.timing else cases()):
-        if a.only and a.only not in c["name"]:
+        if a.only and not any(part and part in c["name"] for part in a.only.split(",")):
             continue
         d = os.path.join(a.work, c["name"].replace(" ", "_").replace("/", "_").replace(",", ""))
         os.makedirs(d, exist_ok=True)
