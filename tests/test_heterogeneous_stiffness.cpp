@@ -23,6 +23,7 @@
 #include "models/sim/simulation.h"
 #include "models/sim/timestep_graph.h"
 #include "runtime/errors.h"
+#include "tests/calculix_reference.h"
 
 namespace ssc {
 namespace {
@@ -110,16 +111,10 @@ double reference_number(const json& r, const std::string& key, const std::string
   return sub.empty() ? r.at("reference").at(key).get<double>() : r.at("reference").at(key).at(sub).get<double>();
 }
 
-json read_reference(const std::string& name) {
-  std::ifstream in(std::string(SSC_TEST_DATA_DIR) + "/calculix/" + name + ".json");
-  EXPECT_TRUE(in.good()) << name;
-  return json::parse(in);
-}
-
 TEST(HeterogeneousStiffness, TwoMaterialCantileverAgainstCalculix) {
   // CalculiX's bar: x in [0, 1], 0.1 m square, E = 1e6 Pa (and 4e6 Pa for x >= 0.5 in the
   // two-material case), nu = 0.3, 100 kg/m^3, clamped at x = 0, linear, under its weight.
-  const json homogeneous_ref = read_reference("cantilever_gravity"), two_ref = read_reference("two_material_cantilever_gravity");
+  const json homogeneous_ref = read_calculix_reference("cantilever_gravity"), two_ref = read_calculix_reference("two_material_cantilever_gravity");
   const double h = 0.025;
   const json object = {{"primitive", "box"}, {"half_extents", {0.5, 0.05, 0.05}}, {"position", {0.5, 0.5, 0}}};
   const json clamp = json::array({{{"min", {-1, -1, -1}}, {"max", {0.25 * h, 2, 1}}}});

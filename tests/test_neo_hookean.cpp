@@ -16,12 +16,12 @@
 
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <functional>
 
 #include "models/sim/body.h"
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
+#include "tests/calculix_reference.h"
 
 namespace ssc {
 namespace {
@@ -182,12 +182,6 @@ TEST(NeoHookean, BlockSquashedToHalfByItsWeightMatchesTheClosedFormUninverted) {
   EXPECT_GT(std::abs(nh.u[0].y() - lin.u[0].y()), 0.05 * std::abs(closed)) << "the models must differ at large strain";
 }
 
-json read_reference(const std::string& name) {
-  std::ifstream in(std::string(SSC_TEST_DATA_DIR) + "/calculix/" + name + ".json");
-  EXPECT_TRUE(in.good()) << name;
-  return json::parse(in);
-}
-
 // CalculiX's cantilever (x in [0, 1], 0.1 m square, nu = 0.3, 100 kg/m^3, clamped at x = 0)
 // bending under its weight: linear at E = 1e6 Pa (tip 0.147 m down), and with its Neo-Hooke
 // material and large deformation at E = 1e5 Pa (tip 0.75 m down and 0.40 m back). Its
@@ -197,7 +191,7 @@ json read_reference(const std::string& name) {
 // measures); ssc's large case runs at E k, so that what is compared is the large-rotation
 // response of the two codes and not the lock.
 TEST(NeoHookean, LargeDeflectionCantileverAgainstCalculix) {
-  const json linear_ref = read_reference("cantilever_gravity"), large_ref = read_reference("cantilever_neo_hookean_large");
+  const json linear_ref = read_calculix_reference("cantilever_gravity"), large_ref = read_calculix_reference("cantilever_neo_hookean_large");
   const json object = {{"primitive", "box"}, {"half_extents", {0.5, 0.05, 0.05}}, {"position", {0.5, 0.5, 0}}};
   const json clamp = json::array({{{"min", {-1, -1, -1}}, {"max", {0.25 * 0.025, 2, 1}}}});
   const std::vector<Eigen::Vector3d> tip = {{1.0 - 1e-9, 0.5, 0}};

@@ -300,7 +300,7 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
                                    c));
   if (!(o.holdout > 0 && o.holdout < 1)) throw InputError("--holdout must be in (0, 1)");
   Diagnosis d;
-  say("base model");
+  say("fitting the base model");
   {
     const Problem probe = load_problem(scene_path, overrides, observations, phi_max, o.fit);
     const int n = int(probe.frames.size());
@@ -319,7 +319,7 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   const std::map<std::string, double> base_values = values_by_name(d.base);
   const int planes = int(d.base.problem.scene.planes.size());
 
-  say("score test");
+  say("the score test");
   std::map<std::string, double> score;
   try {
     score = score_test(d.base, scene_path, overrides, observations, phi_max, o, d.heldin_frames);
@@ -340,7 +340,7 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
       const double v0 = get_parameter(PhysicalParameters::from_scene(d.base.problem.scene), spare[size_t(i)]);
       placebo.ranges[spare[size_t(i)]] = {v0 - 0.2, v0 + 0.2};  // m/s (rad/s for a spin)
     }
-    say(placebo.name);
+    say("fitting " + placebo.name);
     d.placebos.push_back(
         fit_model(placebo, scene_path, overrides, observations, phi_max, o, d.heldin_frames, &base_starts));
   }
@@ -402,7 +402,7 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
       d.verdicts.push_back(v);
       continue;
     }
-    say(name);
+    say("fitting " + name);
     FittedModel m;
     try {
       m = fit_model(spec, scene_path, overrides, observations, phi_max, o, d.heldin_frames, &base_starts);

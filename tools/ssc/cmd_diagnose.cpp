@@ -87,7 +87,7 @@ Command register_diagnose(CLI::App& app) {
     const std::string device = opt.device == "cuda" ? gpu_description() : "cpu";
     out.manifest()["device"] = device;
     const Diagnosis d = diagnose(o->scene, o->overrides, o->observations, o->phi_max, opt,
-                                 [](const std::string& what) { std::fprintf(stderr, "diagnose: fitting %s\n", what.c_str()); });
+                                 [](const std::string& what) { std::fprintf(stderr, "diagnose: %s\n", what.c_str()); });
     nlohmann::json dj = diagnosis_json(d);
     dj["device"] = device;
     dj["options"] = {{"fit", opt.fit},           {"candidates", opt.candidates}, {"starts", opt.starts},
