@@ -487,6 +487,8 @@ th, td { border: 1px solid #ddd; padding: 4px 8px; text-align: left; vertical-al
 th { background: #f3f3f3; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 tr.pass { background: #ebfbee; }
+table.candidates { width: 100%; font-size: 12px; }
+table.candidates td { overflow-wrap: anywhere; }
 table.provenance { font-size: 12px; color: #444; }
 table.provenance th { background: none; font-weight: normal; color: #777; }
 figure { margin: 10px 0 18px; }
