@@ -66,6 +66,8 @@ TEST(ParameterTable, RangesAndUnitsAreTheModelsOwn) {
   EXPECT_TRUE(parameter_row("mass_damping").value_error(0).empty());
   EXPECT_FALSE(parameter_row("mass_damping").value_error(-1e-9).empty());
   EXPECT_FALSE(parameter_row("poisson_ratio").value_error(0.5).empty());
+  EXPECT_TRUE(parameter_row("poisson_ratio").value_error(0.0).empty());
+  EXPECT_FALSE(parameter_row("poisson_ratio").value_error(-0.01).empty());
   EXPECT_TRUE(parameter_row("ground.polar_deg").value_error(180).empty());
   EXPECT_FALSE(parameter_row("ground.planes[3].polar_deg").value_error(-1).empty());
   EXPECT_FALSE(parameter_row("gravity.y").value_error(std::nan("")).empty());

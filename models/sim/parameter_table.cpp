@@ -191,6 +191,7 @@ std::vector<ParameterRow> parameter_table(const PhysicalParameters& p) {
   nu.transform = ParameterRow::Transform::Bounded;
   nu.optimiser_lower = 0.01, nu.optimiser_upper = 0.49;
   nu.upper = 0.5;
+  nu.lower_inclusive = true;  // nu = 0 (no lateral contraction) is valid, as in the scene
   for (ParameterRow* damping : {&rows[3], &rows[4]}) damping->lower_inclusive = true;
   add_vector_rows(rows, "gravity", "m/s^2", 1, -2, &PP::gravity, &PG::gravity, "gravity");
   add_vector_rows(rows, "initial.linear_velocity", "m/s", 1, -1, &PP::linear_velocity, &PG::linear_velocity, "v_prev");
