@@ -16,9 +16,9 @@
 //   s = (tr(C^-4) / 3)^(1/4)  (C = F^T F; a smooth maximum of the principal 1/stretch^2),
 //   m ~ mu - lambda ln J (a smooth positive version of it, neo_hookean_system_scale),
 // read off the tangent dP = mu dF + (mu - lambda ln J) F^-T dF^T F^-T + lambda (F^-T : dF) F^-T
-// (both agree with the body's at F = I), and
-// the step's corner force is f = -y_NH(x) + R K_s R^T x, and the solve takes R K_s R^T x off
-// implicitly (its matrix and its right-hand side's K_s u-). At a fixed point of the iterations
+// (both agree with the body's at F = I). The step's corner force is f = -y_NH(x) + R K_s R^T x;
+// the solve takes R K_s R^T x off again implicitly (its matrix and its right-hand side's
+// K_s u-). At a fixed point of the iterations
 // the step's elastic force is exactly the Neo-Hookean one. A fixed-point iteration with matrix
 // A converges where A^-1 (the true Jacobian) has its eigenvalues in (0, 2); the scaled
 // stiffness keeps them near 1 where the corotated one (too soft by 1/stretch^2 in compression)
