@@ -1065,6 +1065,46 @@ TEST(ReconstructionEndToEnd, BatchEqualsStartsRunOneByOne) {
     std::printf("%s: %d evaluations per way, %.2f s for both ways\n", name.c_str(), evaluations, seconds_since(t0));
   }
 }
+TEST(ReconstructionEndToEnd, StartsFittingDifferentParametersMatchTheirOwnFits) {
+  // One batch over (E, mass damping) where one start moves only E (the damping held at a
+  // value the scene does not have) and one moves both: each bitwise equal to its own
+  // reconstruction, and the held value never changes (`ssc diagnose` batches its models so).
+  const Problem& problem = sphere_problem();
+  ReconstructionOptions o;
+  o.fit = {"youngs_modulus", "mass_damping"};
+  o.optimizer = "rprop";
+  o.optimizer_options.max_iterations = 3;
+  o.initial_values = {vec({0.5 * kTrueYoungsModulus, 0.3}), vec({2 * kTrueYoungsModulus, 0.05})};
+  o.start_free = {{0}, {0, 1}};
+  const ReconstructionResult batch = reconstruct(problem, o);
+  ASSERT_EQ(batch.starts.size(), 2u);
+  for (const StartRecord& s : batch.starts) ASSERT_FALSE(s.failed) << s.failure;
+  for (const Vec& x : batch.starts[0].parameter_history) EXPECT_EQ(x[1], 0.3);
+  EXPECT_EQ(batch.starts[0].final[1], 0.3);
+  EXPECT_NE(batch.starts[0].final[0], 0.5 * kTrueYoungsModulus);
+  EXPECT_NE(batch.starts[1].final[1], 0.05);
+
+  Problem held = problem;  // start 0 alone: E fitted, the damping set in the scene
+  held.scene.material.mass_damping = 0.3;
+  ReconstructionOptions alone = o;
+  alone.start_free.clear();
+  alone.fit = {"youngs_modulus"};
+  alone.initial_values = {vec({0.5 * kTrueYoungsModulus})};
+  const ReconstructionResult a = reconstruct(held, alone);
+  EXPECT_EQ(a.starts[0].final[0], batch.starts[0].final[0]);
+  EXPECT_TRUE(bitwise_equal(a.starts[0].cost_history, batch.starts[0].cost_history));
+  alone.fit = o.fit;
+  alone.initial_values = {o.initial_values[1]};
+  const ReconstructionResult b = reconstruct(problem, alone);
+  EXPECT_TRUE(bitwise_equal(b.starts[0].final, batch.starts[1].final));
+  EXPECT_TRUE(bitwise_equal(b.starts[0].cost_history, batch.starts[1].cost_history));
+
+  o.start_free = {{0}};  // one entry per start, indices in range
+  EXPECT_THROW(reconstruct(problem, o), InputError);
+  o.start_free = {{0}, {2}};
+  EXPECT_THROW(reconstruct(problem, o), InputError);
+}
+
 
 TEST(ReconstructionEndToEnd, FiniteDifferenceGradientsTakeTheSameSteps) {
   // The optimiser fed central differences instead of the adjoint: R-Prop only uses the

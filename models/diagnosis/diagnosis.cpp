@@ -124,6 +124,132 @@ FittedModel fit_model(const ModelSpec& spec, const std::string& scene_path, cons
   return m;
 }
 
+// The value a parameter of the shared graph keeps in a model that does not fit it: an
+// extension's "off" value, or the scene's.
+double off_value(const std::string& name, const PhysicalParameters& scene_values) {
+  for (const char* off : {"friction", "air_drag", "stiffness_gradient"})
+    if (name.find(off) != std::string::npos) return 0.0;
+  return get_parameter(scene_values, name);
+}
+
+// Models that share one graph (the base, its placebos, and the extensions with an "off"
+// value: friction, air drag, a stiffness gradient), fitted as one batch of starts: the
+// scene with every extension's ops, each model's starts moving only its own parameters and
+// holding the others at off. Every model gets the base fit's starts for the base
+// parameters (drawn as `reconstruct` draws them) and its own drawn from its ranges, and the
+// same iterations. The first spec is the base; base_starts receives its start values.
+std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const std::string& scene_path,
+                                      const std::vector<std::string>& overrides, const std::string& observations,
+                                      double phi_max, const DiagnosisOptions& o, int heldin,
+                                      std::vector<std::map<std::string, double>>* base_starts) {
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<std::string> all_overrides = overrides, fit = o.fit;
+  for (const ModelSpec& spec : specs) {
+    all_overrides.insert(all_overrides.end(), spec.overrides.begin(), spec.overrides.end());
+    for (const std::string& e : spec.extra)  // the placebos share components
+      if (std::find(fit.begin(), fit.end(), e) == fit.end()) fit.push_back(e);
+  }
+  Problem shared = load_problem(scene_path, all_overrides, observations, phi_max, fit);
+  for (const ModelSpec& spec : specs)
+    if (spec.adjust) spec.adjust(shared);
+  const PhysicalParameters nominal = PhysicalParameters::from_scene(shared.scene);
+  const std::vector<std::string> names = expand_parameter_names(fit, nominal);
+  auto index_of = [&](const std::string& name) {
+    return int(std::find(names.begin(), names.end(), name) - names.begin());
+  };
+
+  // The base parameters' starts, as reconstruct draws them for the base model alone.
+  const std::vector<std::string> base_names = expand_parameter_names(o.fit, nominal);
+  std::vector<ParameterAxis> base_axes;
+  Eigen::VectorXd base_nominal(Eigen::Index(base_names.size()));
+  for (size_t i = 0; i < base_names.size(); ++i) {
+    base_nominal[Eigen::Index(i)] = get_parameter(nominal, base_names[i]);
+    base_axes.push_back(default_axis(base_names[i], base_nominal[Eigen::Index(i)]));
+  }
+  ReconstructionOptions sampling;
+  sampling.starts = o.starts;
+  sampling.seed = o.seed;
+  sampling.start_ranges = scene_start_ranges(shared.scene);
+  const std::vector<Eigen::VectorXd> drawn = sample_starts(ParameterSpace(base_axes), base_nominal, sampling);
+  for (const Eigen::VectorXd& x : drawn) {
+    std::map<std::string, double> v;
+    for (size_t i = 0; i < base_names.size(); ++i) v[base_names[i]] = x[Eigen::Index(i)];
+    base_starts->push_back(v);
+  }
+
+  ReconstructionOptions ro;
+  ro.fit = fit;
+  ro.optimizer = o.optimizer;
+  ro.optimizer_options.max_iterations = o.iterations;
+  ro.seed = o.seed;
+  ro.device = o.device;
+  std::vector<std::vector<std::string>> model_names;
+  for (const ModelSpec& spec : specs) {
+    std::vector<std::string> own = o.fit;
+    own.insert(own.end(), spec.extra.begin(), spec.extra.end());
+    model_names.push_back(expand_parameter_names(own, nominal));
+    std::vector<int> free;
+    for (const std::string& n : model_names.back()) free.push_back(index_of(n));
+    std::mt19937_64 rng(o.seed * 7919 + std::hash<std::string>{}(spec.name));
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (const std::map<std::string, double>& base_values : *base_starts) {
+      Eigen::VectorXd x(Eigen::Index(names.size()));
+      for (size_t i = 0; i < names.size(); ++i) x[Eigen::Index(i)] = off_value(names[i], nominal);
+      for (const std::string& n : model_names.back()) {
+        double& xi = x[index_of(n)];
+        if (const auto b = base_values.find(n); b != base_values.end()) {
+          xi = b->second;
+          continue;
+        }
+        const auto r = spec.ranges.at(n);
+        const double u = unit(rng);
+        xi = spec.log_range ? r.first * std::pow(r.second / r.first, u) : r.first + u * (r.second - r.first);
+      }
+      ro.initial_values.push_back(x);
+      ro.start_free.push_back(free);
+    }
+  }
+  const ReconstructionResult r = reconstruct(held_in(shared, heldin), ro);
+  const double batch_seconds = seconds_since(t0);
+
+  std::vector<FittedModel> models;
+  const size_t S = base_starts->size();
+  for (size_t m = 0; m < specs.size(); ++m) {
+    const ModelSpec& spec = specs[m];
+    FittedModel fm;
+    fm.name = spec.name;
+    fm.extra = spec.extra;
+    fm.names = model_names[m];
+    std::vector<std::string> own_overrides = overrides, own_fit = o.fit;
+    own_overrides.insert(own_overrides.end(), spec.overrides.begin(), spec.overrides.end());
+    own_fit.insert(own_fit.end(), spec.extra.begin(), spec.extra.end());
+    fm.problem = load_problem(scene_path, own_overrides, observations, phi_max, own_fit);
+    if (spec.adjust) spec.adjust(fm.problem);
+    int best = -1;
+    for (size_t s = m * S; s < (m + 1) * S; ++s)
+      if (!r.starts[s].failed && r.starts[s].final.size() > 0 &&
+          (best < 0 || r.starts[s].final_cost < r.starts[size_t(best)].final_cost))
+        best = int(s);
+    fm.seconds = batch_seconds;
+    if (best < 0) {
+      fm.failed = true;
+      fm.failure = r.starts[m * S].failure.empty() ? "no start" : r.starts[m * S].failure;
+      models.push_back(std::move(fm));
+      continue;
+    }
+    const StartRecord& start = r.starts[size_t(best)];
+    fm.values.resize(Eigen::Index(fm.names.size()));
+    for (size_t i = 0; i < fm.names.size(); ++i) fm.values[Eigen::Index(i)] = start.final[index_of(fm.names[i])];
+    if (start.stop_reason == "iteration limit")
+      fm.note = fmt::format("the fit stopped at the iteration limit ({} iterations)", o.iterations);
+    fm.frame_costs = per_frame_costs(fm.problem, with_values(fm.problem.scene, fm.names, fm.values), o.device);
+    for (size_t f = 0; f < fm.frame_costs.size(); ++f)
+      (int(f) < heldin ? fm.heldin_cost : fm.heldout_cost) += fm.frame_costs[f];
+    models.push_back(std::move(fm));
+  }
+  return models;
+}
+
 std::map<std::string, double> values_by_name(const FittedModel& m) {
   std::map<std::string, double> v;
   for (size_t i = 0; i < m.names.size(); ++i) v[m.names[i]] = m.values[Eigen::Index(i)];
@@ -259,10 +385,12 @@ std::map<std::string, double> score_test(const FittedModel& base, const std::str
   return score;
 }
 
-// The placebo's parameters: the initial velocity's components (horizontal ones first, then
-// vertical, then the spin's) that the base fit leaves alone: freedom to fit the held-in
-// frames that no missing effect stands behind, and that persists into the held-out frames
-// no more than any wrong start does. A constant force would not do: it mimics friction.
+// The placebo's parameters: initial velocity components that the base fit leaves alone,
+// those along which the scene's body does not move first (the horizontal linear components
+// it gives as 0, then the spin's), those of its motion last (the other horizontal ones,
+// slowest first, then the vertical). Freedom to fit the held-in frames that no missing
+// effect stands behind. The components of the motion come last because they are not
+// without meaning: a slower throw mimics air drag, as a constant force mimics friction.
 std::vector<std::string> placebo_parameters(const Scene& scene, const std::vector<std::string>& base_fit) {
   const PhysicalParameters p = PhysicalParameters::from_scene(scene);
   const std::vector<std::string> fitted = expand_parameter_names(base_fit, p);
@@ -270,15 +398,49 @@ std::vector<std::string> placebo_parameters(const Scene& scene, const std::vecto
   int along = 0;
   for (int a = 1; a < 3; ++a)
     if (g[a] > g[along]) along = a;
-  std::vector<std::string> order;
+  auto linear = [](int a) { return std::string("initial.linear_velocity.") + "xyz"[a]; };
+  std::vector<int> still, moving;
   for (int a = 0; a < 3; ++a)
-    if (a != along) order.push_back(std::string("initial.linear_velocity.") + "xyz"[a]);
-  order.push_back(std::string("initial.linear_velocity.") + "xyz"[along]);
+    if (a != along) (get_parameter(p, linear(a)) == 0 ? still : moving).push_back(a);
+  std::stable_sort(moving.begin(), moving.end(), [&](int a, int b) {
+    return std::abs(get_parameter(p, linear(a))) < std::abs(get_parameter(p, linear(b)));
+  });
+  std::vector<std::string> order;
+  for (int a : still) order.push_back(linear(a));
   for (int a = 0; a < 3; ++a) order.push_back(std::string("initial.angular_velocity.") + "xyz"[a]);
+  for (int a : moving) order.push_back(linear(a));
+  order.push_back(linear(along));
   std::vector<std::string> out;
   for (const std::string& name : order)
     if (std::find(fitted.begin(), fitted.end(), name) == fitted.end()) out.push_back(name);
   return out;
+}
+
+// A candidate's model, except where it needs the base fit (second_plane's plane).
+ModelSpec candidate_spec(const std::string& name, int planes) {
+  ModelSpec spec{name, {}, {}, {}, false, {}};
+  if (name == "friction") {
+    for (int k = 0; k < planes; ++k) {
+      spec.extra.push_back(plane_parameter(k, "friction"));
+      spec.ranges[spec.extra.back()] = {0.02, 1.0};
+    }
+    spec.log_range = true;
+    spec.adjust = [planes](Problem& p) {  // a positive nominal value (the starts are drawn anyway)
+      for (int k = 0; k < planes; ++k) p.scene.planes[size_t(k)].friction = 0.1;
+    };
+  } else if (name == "air_drag") {
+    spec.overrides = {"air_drag=1"};
+    spec.extra = {"air_drag"};
+    spec.ranges["air_drag"] = {0.5, 50};
+    spec.log_range = true;
+  } else if (name == "heterogeneous_stiffness") {
+    spec.overrides = {"material.stiffness_gradient=[0,0,0]"};
+    spec.extra = {"material.stiffness_gradient"};
+    for (const char* a : {"x", "y", "z"}) spec.ranges[std::string("material.stiffness_gradient.") + a] = {-2, 2};
+  } else if (name == "nonlinear_material") {
+    spec.overrides = {"material.model=\"neo_hookean\""};
+  }
+  return spec;
 }
 
 std::string percent(double x) { return fmt::format("{:.0f} %", 100 * x); }
@@ -300,7 +462,7 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
                                    c));
   if (!(o.holdout > 0 && o.holdout < 1)) throw InputError("--holdout must be in (0, 1)");
   Diagnosis d;
-  say("fitting the base model");
+  Scene probe_scene;
   {
     const Problem probe = load_problem(scene_path, overrides, observations, phi_max, o.fit);
     const int n = int(probe.frames.size());
@@ -311,13 +473,39 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
                                    "frames or raise --holdout",
                                    observations, n, o.holdout));
     d.heldout_from = probe.frames[size_t(d.heldin_frames)].step * probe.scene.time.dt;
+    probe_scene = probe.scene;
   }
+  const int planes = int(probe_scene.planes.size());
+  std::vector<ModelSpec> shared = {{"base", {}, {}, {}, false, {}}};
+  const std::vector<std::string> spare = placebo_parameters(probe_scene, o.fit);
+  for (int k = 1; k <= 3 && k <= int(spare.size()); ++k) {
+    ModelSpec placebo{fmt::format("placebo_{}", k), {}, {}, {}, false, {}};
+    for (int i = 0; i < k; ++i) {
+      placebo.extra.push_back(spare[size_t(i)]);
+      const double v0 = get_parameter(PhysicalParameters::from_scene(probe_scene), spare[size_t(i)]);
+      placebo.ranges[spare[size_t(i)]] = {v0 - 0.2, v0 + 0.2};  // m/s (rad/s for a spin)
+    }
+    shared.push_back(placebo);
+  }
+  const size_t placebo_count = shared.size() - 1;
+  std::map<std::string, std::string> skipped;
+  for (const std::string& name : o.candidates)
+    if (name == "friction" && planes == 0)
+      skipped[name] = "the scene has no ground plane";
+    else if (name == "friction" || name == "air_drag" || name == "heterogeneous_stiffness")
+      shared.push_back(candidate_spec(name, planes));
+  std::string together;
+  for (size_t i = 1; i < shared.size(); ++i) together += (i > 1 ? ", " : "") + shared[i].name;
+  say(fmt::format("fitting the base model with {} as one batch of {} starts", together, shared.size() * size_t(o.starts)));
   std::vector<std::map<std::string, double>> base_starts;
-  d.base = fit_model({"base", {}, {}, {}, false, {}}, scene_path, overrides, observations, phi_max, o, d.heldin_frames,
-                     nullptr, &base_starts);
+  std::vector<FittedModel> fitted =
+      fit_together(shared, scene_path, overrides, observations, phi_max, o, d.heldin_frames, &base_starts);
+  d.base = std::move(fitted[0]);
   if (d.base.failed) throw SimulationError("the base model's fit failed at every start: " + d.base.failure);
+  for (size_t k = 0; k < placebo_count; ++k) d.placebos.push_back(std::move(fitted[1 + k]));
+  std::map<std::string, FittedModel> shared_fits;
+  for (size_t i = 1 + placebo_count; i < fitted.size(); ++i) shared_fits[fitted[i].name] = std::move(fitted[i]);
   const std::map<std::string, double> base_values = values_by_name(d.base);
-  const int planes = int(d.base.problem.scene.planes.size());
 
   say("the score test");
   std::map<std::string, double> score;
@@ -332,86 +520,53 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
     return sa > sb;
   });
 
-  const std::vector<std::string> spare = placebo_parameters(d.base.problem.scene, o.fit);
-  for (int k = 1; k <= 3 && k <= int(spare.size()); ++k) {
-    ModelSpec placebo{fmt::format("placebo_{}", k), {}, {}, {}, false, {}};
-    for (int i = 0; i < k; ++i) {
-      placebo.extra.push_back(spare[size_t(i)]);
-      const double v0 = get_parameter(PhysicalParameters::from_scene(d.base.problem.scene), spare[size_t(i)]);
-      placebo.ranges[spare[size_t(i)]] = {v0 - 0.2, v0 + 0.2};  // m/s (rad/s for a spin)
-    }
-    say("fitting " + placebo.name);
-    d.placebos.push_back(
-        fit_model(placebo, scene_path, overrides, observations, phi_max, o, d.heldin_frames, &base_starts));
-  }
-
   for (const std::string& name : order) {
-    ModelSpec spec{name, {}, {}, {}, false, {}};
-    std::string skip;
-    if (name == "friction") {
-      if (planes == 0) skip = "the scene has no ground plane";
-      for (int k = 0; k < planes; ++k) {
-        spec.extra.push_back(plane_parameter(k, "friction"));
-        spec.ranges[spec.extra.back()] = {0.02, 1.0};
-      }
-      spec.log_range = true;
-      spec.adjust = [planes](Problem& p) {  // a positive nominal value (the starts are drawn anyway)
-        for (int k = 0; k < planes; ++k) p.scene.planes[size_t(k)].friction = 0.1;
-      };
-    } else if (name == "air_drag") {
-      spec.overrides = {"air_drag=1"};
-      spec.extra = {"air_drag"};
-      spec.ranges["air_drag"] = {0.5, 50};
-      spec.log_range = true;
-    } else if (name == "heterogeneous_stiffness") {
-      spec.overrides = {"material.stiffness_gradient=[0,0,0]"};
-      spec.extra = {"material.stiffness_gradient"};
-      for (const char* a : {"x", "y", "z"}) spec.ranges[std::string("material.stiffness_gradient.") + a] = {-2, 2};
-    } else if (name == "nonlinear_material") {
-      spec.overrides = {"material.model=\"neo_hookean\""};
-    } else if (name == "second_plane") {
-      const PlaneProposal plane = propose_plane(d.base, d.heldin_frames);
-      if (!plane.found) {
-        skip = "the fitted body never went beyond the observed points by half a cell: no plane to propose";
-      } else {
-        const PlaneSpec first = planes > 0 ? d.base.problem.scene.planes[0] : PlaneSpec{};
-        const std::string height = plane_parameter(planes, "height");
-        spec.extra = {height};
-        spec.extra_in_load = false;
-        const double h = d.base.problem.grid.h;
-        spec.ranges[height] = {plane.height - 2 * h, plane.height + 2 * h};
-        spec.adjust = [plane, first](Problem& p) {
-          PlaneSpec s = first;
-          s.normal = plane.normal;
-          s.height = plane.height;
-          s.friction = 0;
-          p.scene.planes.push_back(s);
-        };
-      }
-    }
     CandidateVerdict v;
     v.name = name;
     if (score.count(name)) v.score = score.at(name);
-    if (!skip.empty()) {
-      FittedModel m;
-      m.name = name;
-      m.failed = true;
-      m.failure = skip;
-      d.candidates.push_back(m);
-      v.warnings.push_back("not fitted: " + skip);
-      d.verdicts.push_back(v);
-      continue;
-    }
-    say("fitting " + name);
     FittedModel m;
-    try {
-      m = fit_model(spec, scene_path, overrides, observations, phi_max, o, d.heldin_frames, &base_starts);
-    } catch (const std::exception& e) {
-      m.name = name;
-      m.failed = true;
-      m.failure = e.what();
+    m.name = name;
+    if (const auto f = shared_fits.find(name); f != shared_fits.end()) {
+      m = std::move(f->second);
+    } else {
+      ModelSpec spec = candidate_spec(name, planes);
+      if (name == "second_plane") {
+        const PlaneProposal plane = propose_plane(d.base, d.heldin_frames);
+        if (!plane.found) {
+          skipped[name] = "the fitted body never went beyond the observed points by half a cell: no plane to propose";
+        } else {
+          const PlaneSpec first = planes > 0 ? d.base.problem.scene.planes[0] : PlaneSpec{};
+          const std::string height = plane_parameter(planes, "height");
+          spec.extra = {height};
+          spec.extra_in_load = false;
+          const double h = d.base.problem.grid.h;
+          spec.ranges[height] = {plane.height - 2 * h, plane.height + 2 * h};
+          spec.adjust = [plane, first](Problem& p) {
+            PlaneSpec s = first;
+            s.normal = plane.normal;
+            s.height = plane.height;
+            s.friction = 0;
+            p.scene.planes.push_back(s);
+          };
+        }
+      }
+      if (!skipped.count(name)) {
+        say("fitting " + name);
+        try {
+          m = fit_model(spec, scene_path, overrides, observations, phi_max, o, d.heldin_frames, &base_starts);
+        } catch (const std::exception& e) {
+          m.failed = true;
+          m.failure = e.what();
+        }
+      }
     }
-    if (m.failed) v.warnings.push_back("the fit failed: " + m.failure);
+    if (skipped.count(name)) {
+      m.failed = true;
+      m.failure = skipped.at(name);
+      v.warnings.push_back("not fitted: " + m.failure);
+    } else if (m.failed) {
+      v.warnings.push_back("the fit failed: " + m.failure);
+    }
     if (!m.note.empty()) v.warnings.push_back(m.note);
     d.candidates.push_back(std::move(m));
     d.verdicts.push_back(v);

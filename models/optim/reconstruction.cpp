@@ -20,12 +20,14 @@ PhysicalParameters with_values(PhysicalParameters p, const std::vector<std::stri
 }
 
 // The batched simulation of the last round, kept while the number of active starts stays
-// the same, so that a GPU's modules, buffers and captured graphs are set up once.
+// the same, so that a GPU's modules, buffers and captured graphs are set up once. On a GPU,
+// where a step of a small batch costs what it costs for one, a batch whose starts finish
+// is kept and its free places run copies of an active start.
 class BatchSimulations {
  public:
   BatchSimulations(const Problem& problem, const std::string& device) : problem_(problem), gpu_(device == "cuda") {}
   Simulation& batch(int n) {
-    if (!batch_ || batch_->batch() != n) {
+    if (!batch_ || batch_->batch() < n || (batch_->batch() != n && !gpu_)) {
       batch_.reset();
       batch_ = make(n);
     }
@@ -44,6 +46,40 @@ class BatchSimulations {
   std::unique_ptr<Simulation> batch_;
 };
 
+// The coordinates one start's optimiser moves in: the parameters it fits (all, unless
+// ReconstructionOptions::start_free says otherwise), the rest held at their initial values.
+class StartSpace {
+ public:
+  StartSpace(const std::vector<ParameterAxis>& axes, const Eigen::VectorXd& initial, std::vector<int> free)
+      : free_(std::move(free)), space_(select(axes, free_)), held_(initial) {}
+  const ParameterSpace& space() const { return space_; }
+  Eigen::VectorXd to_internal(const Eigen::VectorXd& x) const { return space_.to_internal(take(x)); }
+  Eigen::VectorXd to_physical(const Eigen::VectorXd& z) const {
+    Eigen::VectorXd x = held_;
+    const Eigen::VectorXd moved = space_.to_physical(z);
+    for (size_t i = 0; i < free_.size(); ++i) x[free_[i]] = moved[Eigen::Index(i)];
+    return x;
+  }
+  Eigen::VectorXd gradient_to_internal(const Eigen::VectorXd& z, const Eigen::VectorXd& dJ_dx) const {
+    return space_.gradient_to_internal(z, take(dJ_dx));
+  }
+
+ private:
+  static std::vector<ParameterAxis> select(const std::vector<ParameterAxis>& axes, const std::vector<int>& free) {
+    std::vector<ParameterAxis> out;
+    for (int i : free) out.push_back(axes.at(size_t(i)));
+    return out;
+  }
+  Eigen::VectorXd take(const Eigen::VectorXd& x) const {
+    Eigen::VectorXd out(Eigen::Index(free_.size()));
+    for (size_t i = 0; i < free_.size(); ++i) out[Eigen::Index(i)] = x[free_[i]];
+    return out;
+  }
+  std::vector<int> free_;
+  ParameterSpace space_;
+  Eigen::VectorXd held_;
+};
+
 // Evaluates the starts in `items` as one batch; on a simulation failure, one by one so
 // that only the failing starts are dropped. Returns false for a failed item.
 std::vector<bool> evaluate_batch(BatchSimulations& sims, const Problem& problem, const SurfaceConstraintCost& cost,
@@ -59,8 +95,9 @@ std::vector<bool> evaluate_batch(BatchSimulations& sims, const Problem& problem,
   failures->assign(n, "");
   try {
     Simulation& sim = sims.batch(n);
-    for (int i = 0; i < n; ++i) sim.set_parameters(i, with_values(base, names, points[i]));
+    for (int i = 0; i < sim.batch(); ++i) sim.set_parameters(i, with_values(base, names, points[size_t(i < n ? i : 0)]));
     *results = evaluate_cost_gradient(sim, cost, problem.frames, options);
+    results->resize(size_t(n));
     return ok;
   } catch (const SimulationError& e) {
     sims.forget();
@@ -154,11 +191,22 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
   BatchSimulations sims(problem, o.device);
 
   const int S = int(initial.size());
+  if (!o.start_free.empty() && o.start_free.size() != initial.size())
+    throw InputError("reconstruct: start_free needs one entry per start");
+  std::vector<StartSpace> spaces;
   std::vector<std::unique_ptr<Optimizer>> opt;
   result.starts.resize(S);
   for (int s = 0; s < S; ++s) {
+    std::vector<int> free;
+    if (o.start_free.empty())
+      for (int i = 0; i < space.size(); ++i) free.push_back(i);
+    else
+      free = o.start_free[size_t(s)];
+    for (int i : free)
+      if (i < 0 || i >= space.size()) throw InputError("reconstruct: a start_free index is out of range");
+    spaces.emplace_back(space.axes(), initial[s], free);
     result.starts[s].initial = initial[s];
-    opt.push_back(make_optimizer(o.optimizer, space.to_internal(initial[s]), o.optimizer_options));
+    opt.push_back(make_optimizer(o.optimizer, spaces[s].to_internal(initial[s]), o.optimizer_options));
   }
   for (int round = 0;; ++round) {
     std::vector<int> active;
@@ -166,7 +214,7 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
       if (!opt[s]->done() && !result.starts[s].failed) active.push_back(s);
     if (active.empty()) break;
     std::vector<Eigen::VectorXd> points;
-    for (int s : active) points.push_back(space.to_physical(opt[s]->ask()));
+    for (int s : active) points.push_back(spaces[s].to_physical(opt[s]->ask()));
     std::vector<CostGradient> values;
     std::vector<std::string> failures;
     const std::vector<bool> ok =
@@ -179,21 +227,22 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
     if (o.finite_differences) {
       std::vector<Eigen::VectorXd> probes;
       for (int s : active)
-        for (int i = 0; i < space.size(); ++i)
+        for (int i = 0; i < spaces[s].space().size(); ++i)
           for (double sign : {1.0, -1.0}) {
             Eigen::VectorXd z = opt[s]->ask();
             z[i] += sign * o.fd_step;
-            probes.push_back(space.to_physical(z));
+            probes.push_back(spaces[s].to_physical(z));
           }
       std::vector<CostGradient> probe_values;
       std::vector<std::string> probe_failures;
       const std::vector<bool> probe_ok =
           evaluate_batch(sims, problem, cost, base, result.names, probes, &probe_values, &probe_failures, false);
       result.evaluations += int(probes.size());
+      size_t a = 0;
       for (size_t k = 0; k < active.size(); ++k) {
-        fd_gradient[k].resize(space.size());
-        for (int i = 0; i < space.size(); ++i) {
-          const size_t a = (k * space.size() + i) * 2;
+        const int n = spaces[active[k]].space().size();
+        fd_gradient[k].resize(n);
+        for (int i = 0; i < n; ++i, a += 2) {
           fd_gradient[k][i] = (probe_values[a].cost - probe_values[a + 1].cost) / (2 * o.fd_step);
           if (!probe_ok[a] || !probe_ok[a + 1]) fd_failure[k] = "a finite-difference probe failed: " + probe_failures[probe_ok[a] ? a + 1 : a];
         }
@@ -210,7 +259,7 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
       for (int i = 0; i < space.size(); ++i) g[i] = parameter_gradient(values[k].gradient, with_values(base, result.names, points[k]), result.names[i]);
       const int before = opt[active[k]]->iterations();
       const Eigen::VectorXd internal_gradient =
-          o.finite_differences ? fd_gradient[k] : space.gradient_to_internal(opt[active[k]]->ask(), g);
+          o.finite_differences ? fd_gradient[k] : spaces[active[k]].gradient_to_internal(opt[active[k]]->ask(), g);
       if (rec.initial_gradient_norm < 0) rec.initial_gradient_norm = internal_gradient.norm();
       if (values[k].cost < opt[active[k]]->best_cost()) {
         rec.frames = values[k].frames;
@@ -228,7 +277,7 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
       int best = -1;
       for (int s = 0; s < S; ++s)
         if (!result.starts[s].failed && (best < 0 || opt[s]->best_cost() < opt[best]->best_cost())) best = s;
-      if (best >= 0) progress(round + 1, int(active.size()), opt[best]->best_cost(), space.to_physical(opt[best]->best_point()));
+      if (best >= 0) progress(round + 1, int(active.size()), opt[best]->best_cost(), spaces[best].to_physical(opt[best]->best_point()));
     }
   }
   for (int s = 0; s < S; ++s) {
@@ -236,7 +285,7 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
     rec.iterations = opt[s]->iterations();
     rec.stop_reason = rec.failed ? "simulation failed" : opt[s]->stop_reason();
     if (rec.failed || opt[s]->best_point().size() == 0) continue;
-    rec.final = space.to_physical(opt[s]->best_point());
+    rec.final = spaces[s].to_physical(opt[s]->best_point());
     rec.final_cost = opt[s]->best_cost();
     if (result.best < 0 || rec.final_cost < result.starts[result.best].final_cost) result.best = s;
   }

@@ -32,6 +32,11 @@ struct ReconstructionOptions {
   // plane's height_range in the scene, models/sim/scene.h).
   std::map<std::string, std::pair<double, double>> start_ranges;
   std::vector<Eigen::VectorXd> initial_values;  // overrides the sampling when non-empty (one per start)
+  // With initial_values: per start, the indices of the parameters it moves; the others keep
+  // their initial values (which then need not be valid on their axis: friction 0, say).
+  // Starts that fit different subsets of one model's parameters so run as one batch (`ssc
+  // diagnose`: the base model, its placebos and several extensions at once). Empty: all.
+  std::vector<std::vector<int>> start_free;
   bool finite_differences = false;  // central differences instead of the adjoint (for comparison)
   double fd_step = 1e-4;            // in the optimiser's internal coordinates (log space: 0.01 %)
   std::string device = "cpu";       // "cuda": simulations and adjoints on the GPU (Simulation::use_gpu)
