@@ -24,9 +24,11 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 // How a model differs from the base: scene overrides, parameters to fit beside the base's
 // (with the range their starts are drawn from), and a change of the loaded problem.
 struct ModelSpec {
+  explicit ModelSpec(std::string model) : name(std::move(model)) {}
   std::string name;
   std::vector<std::string> overrides, extra;
   std::map<std::string, std::pair<double, double>> ranges;  // per extra parameter
+  std::map<std::string, double> magnitudes;                 // typical magnitudes of free extra parameters
   bool log_range = false;                                   // draw log-uniformly (positive parameters)
   std::function<void(Problem&)> adjust;
   // The scene loads with the extra parameters named (which puts friction's and drag's ops in
@@ -85,6 +87,7 @@ FittedModel fit_model(const ModelSpec& spec, const std::string& scene_path, cons
   ro.optimizer_options.max_iterations = o.iterations;
   ro.seed = o.seed;
   ro.device = o.device;
+  ro.typical_magnitudes = spec.magnitudes;
   if (base_starts) {
     std::mt19937_64 rng(o.seed * 7919 + std::hash<std::string>{}(spec.name));
     std::uniform_real_distribution<double> unit(0.0, 1.0);
@@ -183,6 +186,7 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
   ro.optimizer_options.max_iterations = o.iterations;
   ro.seed = o.seed;
   ro.device = o.device;
+  for (const ModelSpec& spec : specs) ro.typical_magnitudes.insert(spec.magnitudes.begin(), spec.magnitudes.end());
   std::vector<std::vector<std::string>> model_names;
   for (const ModelSpec& spec : specs) {
     std::vector<std::string> own = o.fit;
@@ -416,9 +420,23 @@ std::vector<std::string> placebo_parameters(const Scene& scene, const std::vecto
   return out;
 }
 
-// A candidate's model, except where it needs the base fit (second_plane's plane).
-ModelSpec candidate_spec(const std::string& name, int planes) {
-  ModelSpec spec{name, {}, {}, {}, false, {}};
+// The largest extent of the rest body (m).
+double body_extent(const SimGrid& grid) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  const long nx = grid.sdf.size.x(), nxy = nx * grid.sdf.size.y();
+  for (int i = 0; i < grid.node_count; ++i) {
+    const long n = grid.node_grid[size_t(i)];
+    const Eigen::Vector3d x = grid.sdf.node_position(int(n % nx), int((n / nx) % grid.sdf.size.y()), int(n / nxy));
+    lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  }
+  return grid.node_count > 0 ? (hi - lo).maxCoeff() : 1.0;
+}
+
+// A candidate's model, except where it needs the base fit (second_plane's plane). extent:
+// the body's (m); a stiffness gradient's typical magnitude is 2 / extent (the modulus
+// changes by e^2 across the body), its starts within half that.
+ModelSpec candidate_spec(const std::string& name, int planes, double extent) {
+  ModelSpec spec{name};
   if (name == "friction") {
     for (int k = 0; k < planes; ++k) {
       spec.extra.push_back(plane_parameter(k, "friction"));
@@ -436,7 +454,11 @@ ModelSpec candidate_spec(const std::string& name, int planes) {
   } else if (name == "heterogeneous_stiffness") {
     spec.overrides = {"material.stiffness_gradient=[0,0,0]"};
     spec.extra = {"material.stiffness_gradient"};
-    for (const char* a : {"x", "y", "z"}) spec.ranges[std::string("material.stiffness_gradient.") + a] = {-2, 2};
+    for (const char* a : {"x", "y", "z"}) {
+      const std::string component = std::string("material.stiffness_gradient.") + a;
+      spec.ranges[component] = {-1 / extent, 1 / extent};
+      spec.magnitudes[component] = 2 / extent;
+    }
   } else if (name == "nonlinear_material") {
     spec.overrides = {"material.model=\"neo_hookean\""};
   }
@@ -463,6 +485,7 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   if (!(o.holdout > 0 && o.holdout < 1)) throw InputError("--holdout must be in (0, 1)");
   Diagnosis d;
   Scene probe_scene;
+  double extent = 1;
   {
     const Problem probe = load_problem(scene_path, overrides, observations, phi_max, o.fit);
     const int n = int(probe.frames.size());
@@ -474,12 +497,21 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
                                    observations, n, o.holdout));
     d.heldout_from = probe.frames[size_t(d.heldin_frames)].step * probe.scene.time.dt;
     probe_scene = probe.scene;
+    extent = body_extent(probe.grid);
   }
   const int planes = int(probe_scene.planes.size());
-  std::vector<ModelSpec> shared = {{"base", {}, {}, {}, false, {}}};
+  std::vector<ModelSpec> shared = {ModelSpec{"base"}};
+  // A placebo for each count of extra parameters a candidate has (more than 3: the 3-parameter
+  // placebo's gain, scaled).
   const std::vector<std::string> spare = placebo_parameters(probe_scene, o.fit);
-  for (int k = 1; k <= 3 && k <= int(spare.size()); ++k) {
-    ModelSpec placebo{fmt::format("placebo_{}", k), {}, {}, {}, false, {}};
+  const int most = std::min(3, int(spare.size()));
+  std::set<int> counts;
+  for (const std::string& name : o.candidates) {
+    const int extra = name == "friction" ? planes : name == "heterogeneous_stiffness" ? 3 : name == "nonlinear_material" ? 0 : 1;
+    if (extra > 0 && most > 0) counts.insert(std::min(extra, most));
+  }
+  for (int k : counts) {
+    ModelSpec placebo{fmt::format("placebo_{}", k)};
     for (int i = 0; i < k; ++i) {
       placebo.extra.push_back(spare[size_t(i)]);
       const double v0 = get_parameter(PhysicalParameters::from_scene(probe_scene), spare[size_t(i)]);
@@ -493,7 +525,7 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
     if (name == "friction" && planes == 0)
       skipped[name] = "the scene has no ground plane";
     else if (name == "friction" || name == "air_drag" || name == "heterogeneous_stiffness")
-      shared.push_back(candidate_spec(name, planes));
+      shared.push_back(candidate_spec(name, planes, extent));
   std::string together;
   for (size_t i = 1; i < shared.size(); ++i) together += (i > 1 ? ", " : "") + shared[i].name;
   say(fmt::format("fitting the base model with {} as one batch of {} starts", together, shared.size() * size_t(o.starts)));
@@ -529,7 +561,7 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
     if (const auto f = shared_fits.find(name); f != shared_fits.end()) {
       m = std::move(f->second);
     } else {
-      ModelSpec spec = candidate_spec(name, planes);
+      ModelSpec spec = candidate_spec(name, planes, extent);
       if (name == "second_plane") {
         const PlaneProposal plane = propose_plane(d.base, d.heldin_frames);
         if (!plane.found) {
@@ -572,15 +604,16 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
     d.verdicts.push_back(v);
   }
 
-  // Verdicts against the placebos (0 extra parameters: none; more than 3: the
-  // three-parameter placebo's gain scaled by the count).
+  // Verdicts against the placebos.
   auto placebo_gain = [&](size_t extra) {
-    if (extra == 0 || d.placebos.empty()) return 0.0;
-    const size_t k = std::min(extra, d.placebos.size());
-    const FittedModel& p = d.placebos[k - 1];
-    if (p.failed) return 0.0;
-    const double g = held_out_gain(d.base.frame_costs, p.frame_costs, d.heldin_frames, 1, o.seed).value;
-    return g * double(extra) / double(k);
+    if (extra == 0) return 0.0;
+    for (const FittedModel& p : d.placebos)
+      if (p.extra.size() == std::min<size_t>(extra, size_t(most))) {
+        if (p.failed) return 0.0;
+        const double g = held_out_gain(d.base.frame_costs, p.frame_costs, d.heldin_frames, 1, o.seed).value;
+        return g * double(extra) / double(p.extra.size());
+      }
+    return 0.0;
   };
   std::vector<size_t> named;
   for (size_t i = 0; i < d.candidates.size(); ++i) {

@@ -74,7 +74,7 @@ struct Diagnosis {
   int heldin_frames = 0, heldout_frames = 0;
   double heldout_from = 0;  // time of the first held-out frame, s
   FittedModel base;
-  std::vector<FittedModel> candidates, placebos;  // placebos by extra-parameter count 1, 2, 3
+  std::vector<FittedModel> candidates, placebos;  // a placebo per count of extra parameters (1..3) a candidate has
   std::vector<CandidateVerdict> verdicts;         // one per candidate, in the order fitted
   std::string cause = "none";
   std::vector<std::pair<std::string, std::string>> confounded;

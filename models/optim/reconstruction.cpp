@@ -176,6 +176,9 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
   for (size_t i = 0; i < result.names.size(); ++i) {
     result.nominal[i] = get_parameter(base, result.names[i]);
     axes.push_back(default_axis(result.names[i], result.nominal[i]));
+    if (const auto m = o.typical_magnitudes.find(result.names[i]);
+        m != o.typical_magnitudes.end() && axes.back().kind == ParameterAxis::Kind::Free)
+      axes.back().scale = std::max(std::abs(result.nominal[i]), m->second);
     if (axes.back().kind == ParameterAxis::Kind::Positive && !(result.nominal[i] > 0))
       throw InputError(fmt::format("{}: --fit {}: its value in the scene is {:g}; the starts of a positive parameter are "
                                    "drawn from 0.1 to 10 times it, so give the scene a nominal value above 0 (e.g. "

@@ -31,6 +31,9 @@ struct ReconstructionOptions {
   // Ranges [low, high] the starts of these parameters are drawn from uniformly instead (a
   // plane's height_range in the scene, models/sim/scene.h).
   std::map<std::string, std::pair<double, double>> start_ranges;
+  // Typical magnitudes of free parameters (the optimiser's coordinate is x / max(|nominal|,
+  // magnitude); default 1 in the parameter's unit), by name.
+  std::map<std::string, double> typical_magnitudes;
   std::vector<Eigen::VectorXd> initial_values;  // overrides the sampling when non-empty (one per start)
   // With initial_values: per start, the indices of the parameters it moves; the others keep
   // their initial values (which then need not be valid on their axis: friction 0, say).

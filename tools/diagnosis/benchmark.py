@@ -72,9 +72,11 @@ def cases():
         d = copy.deepcopy(base); d["material"]["model"] = "neo_hookean"; d["initial"]["linear_velocity"][1] = v
         f = copy.deepcopy(base); f["initial"]["linear_velocity"][1] = v
         out.append(case(f"Neo-Hookean, thrown at {-v} m/s", "nonlinear_material", strength, d, f))
-    # heterogeneous stiffness: a soft tall box landing tilted; stiffer towards +x
+    # heterogeneous stiffness: a soft long box thrown onto its face, stiffer towards +x: it
+    # tilts after the bounce. (A box landing on an edge while spinning, tried first, was chaotic:
+    # a sideways velocity change of 0.011 m/s moved the held-out cost by 39 %.)
     base = cube([0, 0.3, 0], [0.5, -1.5, 0], E=1.5e4); base["object"]["half_extents"] = [0.15, 0.1, 0.1]
-    base["initial"]["angular_velocity"] = [0, 0, 3.0]; base["observation"] = camera([0.3, 0.5, 1.6], [0.2, 0.15, 0])
+    base["observation"] = camera([0.3, 0.5, 1.6], [0.2, 0.15, 0])
     for strength, g in (("subtle", 3.0), ("clear", 8.0)):
         d = copy.deepcopy(base); d["material"]["stiffness_gradient"] = [g, 0, 0]
         out.append(case(f"stiffness gradient {g:g} 1/m", "heterogeneous_stiffness", strength, d, base))
