@@ -3,6 +3,8 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -144,7 +146,7 @@ double off_value(const std::string& name, const PhysicalParameters& scene_values
 std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const std::string& scene_path,
                                       const std::vector<std::string>& overrides, const std::string& observations,
                                       double phi_max, const DiagnosisOptions& o, int heldin,
-                                      std::vector<std::map<std::string, double>>* base_starts) {
+                                      std::vector<std::map<std::string, double>>* base_starts, Problem* shared_problem) {
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<std::string> all_overrides = overrides, fit = o.fit;
   for (const ModelSpec& spec : specs) {
@@ -215,6 +217,7 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
   }
   const ReconstructionResult r = reconstruct(held_in(shared, heldin), ro);
   const double batch_seconds = seconds_since(t0);
+  *shared_problem = shared;
 
   std::vector<FittedModel> models;
   const size_t S = base_starts->size();
@@ -469,6 +472,111 @@ std::string percent(double x) { return fmt::format("{:.0f} %", 100 * x); }
 
 }  // namespace
 
+namespace {
+
+// The extension a parameter belongs to ("mass_damping" and the base's own for the others).
+std::string owner(const std::string& parameter) {
+  if (parameter.find("friction") != std::string::npos) return "friction";
+  if (parameter == "air_drag") return "air_drag";
+  if (parameter.find("stiffness_gradient") != std::string::npos) return "heterogeneous_stiffness";
+  if (parameter.rfind("ground.planes[", 0) == 0 && parameter.find(".height") != std::string::npos) return "second_plane";
+  return parameter;
+}
+
+// Fills d.identifiability and d.indistinguishable at the fit m of the cause: over m's
+// parameters, the mass damping, and (shared: the graph m was fitted in, with every extension
+// that has an off value) the other candidates' parameters at off. Steps: 1e-3 of a value, 1e-2
+// of a typical amount at 0.
+void identifiability_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const std::string& device,
+                        double extent) {
+  const Problem& problem = shared ? *shared : m.problem;
+  PhysicalParameters at = PhysicalParameters::from_scene(problem.scene);
+  std::vector<std::string> names = m.names;
+  if (shared) {
+    for (const std::string& n : expand_parameter_names({"air_drag", "material.stiffness_gradient"}, at))
+      if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
+    for (size_t k = 0; k < problem.scene.planes.size(); ++k)
+      if (const std::string n = plane_parameter(int(k), "friction"); std::find(names.begin(), names.end(), n) == names.end())
+        names.push_back(n);
+    for (const std::string& n : names) set_parameter(at, n, off_value(n, at));
+  }
+  for (size_t i = 0; i < m.names.size(); ++i) set_parameter(at, m.names[i], m.values[Eigen::Index(i)]);
+  if (std::find(names.begin(), names.end(), "mass_damping") == names.end()) names.push_back("mass_damping");
+  std::vector<double> steps;
+  for (const std::string& n : names) {
+    const double v = get_parameter(at, n);
+    const std::string o = owner(n);
+    const double typical = o == "friction" ? 0.3 : o == "air_drag" ? 10 : o == "heterogeneous_stiffness" ? 2 / extent : 1.0;
+    steps.push_back(v != 0 ? 1e-3 * std::abs(v) : 1e-2 * typical);
+  }
+  Problem heldin = problem;
+  heldin.frames.resize(size_t(d.heldin_frames));
+  d.identifiability = parameter_correlation(heldin, at, names, steps, device);
+  if (!d.identifiability.failure.empty()) return;
+  for (size_t i = 0; i < names.size(); ++i)
+    for (size_t j = i + 1; j < names.size(); ++j) {
+      const double r = d.identifiability.correlation(Eigen::Index(i), Eigen::Index(j));
+      if (std::abs(r) < 0.95) continue;
+      d.indistinguishable.emplace_back(names[i], names[j], r);
+      const std::string a = owner(names[i]), b = owner(names[j]);
+      if (a == b || (a != m.name && b != m.name)) continue;
+      const std::string other = a == m.name ? b : a;
+      const bool listed = std::any_of(d.confounded.begin(), d.confounded.end(), [&](const auto& p) {
+        return (p.first == m.name && p.second == other) || (p.first == other && p.second == m.name);
+      });
+      if (!listed && (other == "mass_damping" || other == "friction" || other == "air_drag" ||
+                      other == "heterogeneous_stiffness" || other == "second_plane"))
+        d.confounded.push_back({m.name, other});
+    }
+}
+
+}  // namespace
+
+ParameterCorrelation parameter_correlation(const Problem& problem, const PhysicalParameters& at,
+                                           const std::vector<std::string>& names, const std::vector<double>& steps,
+                                           const std::string& device) {
+  ParameterCorrelation c;
+  c.names = names;
+  const int n = int(names.size());
+  if (n == 0 || steps.size() != names.size()) throw InputError("parameter_correlation: one step per parameter");
+  Simulation sim(problem.scene, problem.grid, n + 1, true);
+  if (device == "cuda") sim.use_gpu();
+  sim.set_parameters(0, at);
+  for (int j = 0; j < n; ++j) {
+    PhysicalParameters p = at;
+    set_parameter(p, names[size_t(j)], get_parameter(at, names[size_t(j)]) + steps[size_t(j)]);
+    sim.set_parameters(j + 1, p);
+  }
+  const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
+  const std::vector<CostGradient> r = evaluate_cost_gradient(sim, cost, problem.frames, {});
+  auto gradient = [&](int item) {
+    Eigen::VectorXd g(n);
+    for (int i = 0; i < n; ++i) g[i] = parameter_gradient(r[size_t(item)].gradient, at, names[size_t(i)]);
+    return g;
+  };
+  const Eigen::VectorXd g0 = gradient(0);
+  c.hessian.resize(n, n);
+  for (int j = 0; j < n; ++j) c.hessian.col(j) = (gradient(j + 1) - g0) / steps[size_t(j)];
+  c.hessian = (0.5 * (c.hessian + c.hessian.transpose())).eval();
+  const Eigen::VectorXd d = c.hessian.diagonal();
+  if ((d.array() <= 0).any()) {
+    c.failure = "the cost does not curve upwards along every parameter there";
+    return c;
+  }
+  const Eigen::VectorXd s = d.cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd scaled = s.asDiagonal() * c.hessian * s.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
+  if (eig.eigenvalues().minCoeff() <= 1e-12 * eig.eigenvalues().maxCoeff()) {
+    c.failure = "the Hessian is not positive definite there (no minimum along some combination of the parameters)";
+    return c;
+  }
+  const Eigen::MatrixXd covariance = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
+                                     eig.eigenvectors().transpose();
+  const Eigen::VectorXd t = covariance.diagonal().cwiseSqrt().cwiseInverse();
+  c.correlation = t.asDiagonal() * covariance * t.asDiagonal();
+  return c;
+}
+
 Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>& overrides,
                    const std::string& observations, double phi_max, const DiagnosisOptions& o,
                    const DiagnosisProgress& progress) {
@@ -530,8 +638,9 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   for (size_t i = 1; i < shared.size(); ++i) together += (i > 1 ? ", " : "") + shared[i].name;
   say(fmt::format("fitting the base model with {} as one batch of {} starts", together, shared.size() * size_t(o.starts)));
   std::vector<std::map<std::string, double>> base_starts;
+  Problem shared_problem;
   std::vector<FittedModel> fitted =
-      fit_together(shared, scene_path, overrides, observations, phi_max, o, d.heldin_frames, &base_starts);
+      fit_together(shared, scene_path, overrides, observations, phi_max, o, d.heldin_frames, &base_starts, &shared_problem);
   d.base = std::move(fitted[0]);
   if (d.base.failed) throw SimulationError("the base model's fit failed at every start: " + d.base.failure);
   for (size_t k = 0; k < placebo_count; ++k) d.placebos.push_back(std::move(fitted[1 + k]));
@@ -638,6 +747,16 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
       if (diff.low <= 0) d.confounded.push_back({d.verdicts[named[a]].name, d.verdicts[named[b]].name});
     }
 
+  // Identifiability at the cause's fit.
+  if (!named.empty()) {
+    const FittedModel& m = d.candidates[named[0]];
+    try {
+      identifiability_at(d, m, shared_fits.count(m.name) ? &shared_problem : nullptr, o.device, extent);
+    } catch (const std::exception& e) {
+      d.identifiability.failure = e.what();
+    }
+  }
+
   // What to tell the user.
   if (named.empty()) {
     size_t best = d.verdicts.size();
@@ -667,6 +786,12 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   }
   for (const auto& [a, b] : d.confounded)
     d.lines.push_back(fmt::format("{} or {}: indistinguishable with this data", a, b));
+  for (const auto& [a, b, r] : d.indistinguishable)
+    d.lines.push_back(fmt::format("{} and {}: correlation {:+.3f} at the fit (the held-in cost's curvature): the data "
+                                  "fix a combination of them, not each",
+                                  a, b, r));
+  if (!named.empty() && !d.identifiability.failure.empty())
+    d.lines.push_back("identifiability not assessed: " + d.identifiability.failure);
   for (size_t i = 0; i < d.candidates.size(); ++i) {
     const FittedModel& m = d.candidates[i];
     if (m.failed) continue;
@@ -741,6 +866,18 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   j["placebos"] = placebos;
   j["confounded"] = nlohmann::json::array();
   for (const auto& [a, b] : d.confounded) j["confounded"].push_back({a, b});
+  nlohmann::json id;
+  id["parameters"] = d.identifiability.names;
+  id["failure"] = d.identifiability.failure;
+  id["correlation"] = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < d.identifiability.correlation.rows(); ++i) {
+    std::vector<double> row;
+    for (Eigen::Index k = 0; k < d.identifiability.correlation.cols(); ++k) row.push_back(d.identifiability.correlation(i, k));
+    id["correlation"].push_back(row);
+  }
+  id["indistinguishable"] = nlohmann::json::array();
+  for (const auto& [a, b, r] : d.indistinguishable) id["indistinguishable"].push_back({{"a", a}, {"b", b}, {"correlation", r}});
+  j["identifiability"] = id;
   j["lines"] = d.lines;
   j["seconds"] = d.seconds;
   return j;

@@ -11,6 +11,10 @@
 // least `min_gain` and its interval's lower end beats its placebo's gain by `margin`; the
 // cause is the named candidate with the largest gain, or "none". Two named candidates whose
 // gains differ by less than their difference's interval are reported as confounded.
+// Identifiability: at the cause's fit, the held-in cost's Hessian over its parameters, the
+// other candidates' that share its graph and the mass damping (parameter_correlation below);
+// two of them with a correlation near +-1 trade one for the other: the data cannot tell them
+// apart ("air drag or mass damping").
 // Before the fits, a score test ranks the candidates that have parameters with an "off"
 // value: the held-in cost's gradient at the base fit with the extension at off (friction,
 // air drag, a stiffness gradient: one backward pass for all), as the cost decrease it
@@ -22,6 +26,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "models/sim/problem.h"
@@ -70,6 +75,20 @@ struct CandidateVerdict {
   std::vector<std::string> warnings;
 };
 
+// The shape of the cost's minimum at a point: the cost's Hessian over `names`, each column a
+// forward difference (step steps[j]) of the exact adjoint gradient, all n + 1 evaluations as
+// one batch, symmetrised; its inverse (the parameters' covariance up to a factor) scaled to a
+// unit diagonal. `failure` says why there is none (the Hessian is not positive definite there:
+// the cost has no minimum in some direction of these parameters).
+struct ParameterCorrelation {
+  std::vector<std::string> names;
+  Eigen::MatrixXd hessian, correlation;
+  std::string failure;
+};
+ParameterCorrelation parameter_correlation(const Problem& problem, const PhysicalParameters& at,
+                                           const std::vector<std::string>& names, const std::vector<double>& steps,
+                                           const std::string& device);
+
 struct Diagnosis {
   int heldin_frames = 0, heldout_frames = 0;
   double heldout_from = 0;  // time of the first held-out frame, s
@@ -78,6 +97,9 @@ struct Diagnosis {
   std::vector<CandidateVerdict> verdicts;         // one per candidate, in the order fitted
   std::string cause = "none";
   std::vector<std::pair<std::string, std::string>> confounded;
+  ParameterCorrelation identifiability;  // at the cause's fit (empty names: not assessed)
+  // Pairs of parameters whose correlation there is at least 0.95 in size, with it.
+  std::vector<std::tuple<std::string, std::string, double>> indistinguishable;
   std::vector<std::string> lines;  // what to tell the user
   double seconds = 0;
 };
