@@ -161,8 +161,8 @@ TEST_F(DiagnoseCli, BadInputIsAnInputErrorAndWritesNothing) {
 TEST_F(DiagnoseCli, AirDragAndMassDampingTradeOffWhereTheYoungsModulusIsDetermined) {
   // The classic pair: quadratic air drag and Rayleigh mass damping both slow the cube along
   // its path; over a 0.8 s throw one stands in for the other. The Young's modulus, which sets
-  // the bounce, is not traded against either. The Hessian of the cost at the truth, from
-  // forward differences of the adjoint gradient.
+  // the bounce, is not traded against either. The Gauss-Newton matrix of the residuals at the
+  // truth.
   json scene = cube_scene(0.01, 0.0, 5e4, true);
   scene["air_drag"] = 10.0;
   scene["material"]["mass_damping"] = 0.2;
@@ -173,12 +173,14 @@ TEST_F(DiagnoseCli, AirDragAndMassDampingTradeOffWhereTheYoungsModulusIsDetermin
   const ParameterCorrelation c =
       parameter_correlation(problem, truth, {"air_drag", "mass_damping", "youngs_modulus"}, {0.01, 0.0002, 50}, "cpu");
   ASSERT_TRUE(c.failure.empty()) << c.failure;
+  ASSERT_EQ(c.names.size(), 3u);
   std::printf("correlation: drag-damping %.4f, drag-E %.4f, damping-E %.4f\n", c.correlation(0, 1), c.correlation(0, 2),
               c.correlation(1, 2));
   EXPECT_GT(std::abs(c.correlation(0, 1)), 0.95);
   EXPECT_LT(std::abs(c.correlation(0, 2)), 0.9);
   EXPECT_LT(std::abs(c.correlation(1, 2)), 0.9);
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(c.correlation(i, i), 1.0, 1e-12);
+  EXPECT_GT(c.gauss_newton(0, 0), 0);
   EXPECT_THROW(parameter_correlation(problem, truth, {"air_drag"}, {}, "cpu"), InputError);
 }
 

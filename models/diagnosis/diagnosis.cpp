@@ -486,7 +486,7 @@ std::string owner(const std::string& parameter) {
 // Fills d.identifiability and d.indistinguishable at the fit m of the cause: over m's
 // parameters, the mass damping, and (shared: the graph m was fitted in, with every extension
 // that has an off value) the other candidates' parameters at off. Steps: 1e-3 of a value, 1e-2
-// of a typical amount at 0.
+// of a typical amount at 0 (forward, so that friction and drag stay valid).
 void identifiability_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const std::string& device,
                         double extent) {
   const Problem& problem = shared ? *shared : m.problem;
@@ -513,6 +513,7 @@ void identifiability_at(Diagnosis& d, const FittedModel& m, const Problem* share
   heldin.frames.resize(size_t(d.heldin_frames));
   d.identifiability = parameter_correlation(heldin, at, names, steps, device);
   if (!d.identifiability.failure.empty()) return;
+  names = d.identifiability.names;
   for (size_t i = 0; i < names.size(); ++i)
     for (size_t j = i + 1; j < names.size(); ++j) {
       const double r = d.identifiability.correlation(Eigen::Index(i), Eigen::Index(j));
@@ -536,7 +537,6 @@ ParameterCorrelation parameter_correlation(const Problem& problem, const Physica
                                            const std::vector<std::string>& names, const std::vector<double>& steps,
                                            const std::string& device) {
   ParameterCorrelation c;
-  c.names = names;
   const int n = int(names.size());
   if (n == 0 || steps.size() != names.size()) throw InputError("parameter_correlation: one step per parameter");
   Simulation sim(problem.scene, problem.grid, n + 1, true);
@@ -547,31 +547,48 @@ ParameterCorrelation parameter_correlation(const Problem& problem, const Physica
     set_parameter(p, names[size_t(j)], get_parameter(at, names[size_t(j)]) + steps[size_t(j)]);
     sim.set_parameters(j + 1, p);
   }
+  // Each point's residual r, its cost term r^2 / 2 (surface_constraint.h): r = sign(phi) phi_max
+  // sqrt(1 - exp(-phi^2 / phi_max^2)) sqrt(weight / N), phi_max sqrt(weight / N) unmatched.
   const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
-  const std::vector<CostGradient> r = evaluate_cost_gradient(sim, cost, problem.frames, {});
-  auto gradient = [&](int item) {
-    Eigen::VectorXd g(n);
-    for (int i = 0; i < n; ++i) g[i] = parameter_gradient(r[size_t(item)].gradient, at, names[size_t(i)]);
-    return g;
-  };
-  const Eigen::VectorXd g0 = gradient(0);
-  c.hessian.resize(n, n);
-  for (int j = 0; j < n; ++j) c.hessian.col(j) = (gradient(j + 1) - g0) / steps[size_t(j)];
-  c.hessian = (0.5 * (c.hessian + c.hessian.transpose())).eval();
-  const Eigen::VectorXd d = c.hessian.diagonal();
-  if ((d.array() <= 0).any()) {
-    c.failure = "the cost does not curve upwards along every parameter there";
+  const double phi_max = problem.phi_max;
+  std::vector<std::vector<double>> r(size_t(n + 1));
+  int step = 0;
+  for (const ObservedFrame& frame : problem.frames) {
+    while (step < frame.step) sim.step(), ++step;
+    if (frame.points.empty()) continue;
+    const double scale = std::sqrt(frame.weight / double(frame.points.size()));
+    for (int item = 0; item <= n; ++item)
+      for (const SurfaceConstraintCost::PointResidual& p :
+           cost.point_residuals(frame.points, sim.displacement(item), sim.band_displacement(item)))
+        r[size_t(item)].push_back(
+            scale * (p.matched() ? std::copysign(phi_max * std::sqrt(-std::expm1(-p.phi * p.phi / (phi_max * phi_max))), p.phi)
+                                 : phi_max));
+  }
+  Eigen::MatrixXd J(Eigen::Index(r[0].size()), n);
+  const Eigen::Map<const Eigen::VectorXd> r0(r[0].data(), Eigen::Index(r[0].size()));
+  for (int j = 0; j < n; ++j)
+    J.col(j) = (Eigen::Map<const Eigen::VectorXd>(r[size_t(j + 1)].data(), Eigen::Index(r[0].size())) - r0) /
+               steps[size_t(j)];
+  const Eigen::MatrixXd gn = J.transpose() * J;
+  std::vector<int> kept;  // the parameters whose step moved the residuals beyond rounding
+  for (int i = 0; i < n; ++i)
+    (std::abs(steps[size_t(i)]) * J.col(i).norm() > 1e-9 * r0.norm() ? kept.push_back(i) : c.flat.push_back(names[size_t(i)]));
+  for (int i : kept) c.names.push_back(names[size_t(i)]);
+  const Eigen::Index k = Eigen::Index(kept.size());
+  c.gauss_newton.resize(k, k);
+  for (Eigen::Index i = 0; i < k; ++i)
+    for (Eigen::Index m = 0; m < k; ++m) c.gauss_newton(i, m) = gn(kept[size_t(i)], kept[size_t(m)]);
+  if (k < 2) {
+    c.failure = "fewer than 2 parameters change the residuals";
     return c;
   }
-  const Eigen::VectorXd s = d.cwiseSqrt().cwiseInverse();
-  const Eigen::MatrixXd scaled = s.asDiagonal() * c.hessian * s.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled);
-  if (eig.eigenvalues().minCoeff() <= 1e-12 * eig.eigenvalues().maxCoeff()) {
-    c.failure = "the Hessian is not positive definite there (no minimum along some combination of the parameters)";
-    return c;
-  }
-  const Eigen::MatrixXd covariance = eig.eigenvectors() * eig.eigenvalues().cwiseInverse().asDiagonal() *
-                                     eig.eigenvectors().transpose();
+  // The covariance (up to a factor), scaled to a unit diagonal; an exactly confounded pair
+  // (a zero eigenvalue) comes out with correlation +-1.
+  const Eigen::VectorXd s = c.gauss_newton.diagonal().cwiseSqrt().cwiseInverse();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(s.asDiagonal() * c.gauss_newton * s.asDiagonal());
+  const Eigen::VectorXd inverse =
+      eig.eigenvalues().cwiseMax(1e-9 * eig.eigenvalues().maxCoeff()).cwiseInverse();
+  const Eigen::MatrixXd covariance = eig.eigenvectors() * inverse.asDiagonal() * eig.eigenvectors().transpose();
   const Eigen::VectorXd t = covariance.diagonal().cwiseSqrt().cwiseInverse();
   c.correlation = t.asDiagonal() * covariance * t.asDiagonal();
   return c;
@@ -787,11 +804,15 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   for (const auto& [a, b] : d.confounded)
     d.lines.push_back(fmt::format("{} or {}: indistinguishable with this data", a, b));
   for (const auto& [a, b, r] : d.indistinguishable)
-    d.lines.push_back(fmt::format("{} and {}: correlation {:+.3f} at the fit (the held-in cost's curvature): the data "
-                                  "fix a combination of them, not each",
+    d.lines.push_back(fmt::format("{} and {}: correlation {:+.3f} at the fit (Gauss-Newton): the data fix a "
+                                  "combination of them, not each",
                                   a, b, r));
   if (!named.empty() && !d.identifiability.failure.empty())
     d.lines.push_back("identifiability not assessed: " + d.identifiability.failure);
+  std::string flat;
+  for (const std::string& f : d.identifiability.flat)
+    if (owner(f) == d.cause || base_values.count(f)) flat += (flat.empty() ? "" : ", ") + f;
+  if (!flat.empty()) d.lines.push_back("the held-in frames do not depend on " + flat + " at the fit: not determined");
   for (size_t i = 0; i < d.candidates.size(); ++i) {
     const FittedModel& m = d.candidates[i];
     if (m.failed) continue;
@@ -869,6 +890,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   nlohmann::json id;
   id["parameters"] = d.identifiability.names;
   id["failure"] = d.identifiability.failure;
+  id["flat"] = d.identifiability.flat;
   id["correlation"] = nlohmann::json::array();
   for (Eigen::Index i = 0; i < d.identifiability.correlation.rows(); ++i) {
     std::vector<double> row;

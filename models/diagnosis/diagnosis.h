@@ -11,8 +11,9 @@
 // least `min_gain` and its interval's lower end beats its placebo's gain by `margin`; the
 // cause is the named candidate with the largest gain, or "none". Two named candidates whose
 // gains differ by less than their difference's interval are reported as confounded.
-// Identifiability: at the cause's fit, the held-in cost's Hessian over its parameters, the
-// other candidates' that share its graph and the mass damping (parameter_correlation below);
+// Identifiability: at the cause's fit, the Gauss-Newton matrix of the held-in residuals over
+// its parameters, the other candidates' that share its graph and the mass damping
+// (parameter_correlation below);
 // two of them with a correlation near +-1 trade one for the other: the data cannot tell them
 // apart ("air drag or mass damping").
 // Before the fits, a score test ranks the candidates that have parameters with an "off"
@@ -75,14 +76,16 @@ struct CandidateVerdict {
   std::vector<std::string> warnings;
 };
 
-// The shape of the cost's minimum at a point: the cost's Hessian over `names`, each column a
-// forward difference (step steps[j]) of the exact adjoint gradient, all n + 1 evaluations as
-// one batch, symmetrised; its inverse (the parameters' covariance up to a factor) scaled to a
-// unit diagonal. `failure` says why there is none (the Hessian is not positive definite there:
-// the cost has no minimum in some direction of these parameters).
+// How well the data determine parameters at a point: the Gauss-Newton matrix J^T J of the
+// cost's residuals (each observed point's robust residual r, its cost term r^2 / 2), J from
+// forward differences (step steps[j]) of n + 1 simulations run as one batch; its inverse (the
+// parameters' covariance up to a factor) scaled to a unit diagonal is their correlation. A
+// correlation near +-1: the data fix a combination of the two, not each. Parameters the
+// residuals do not depend on there are left out (`flat`); `failure` says why there is no
+// correlation (fewer than two parameters left).
 struct ParameterCorrelation {
-  std::vector<std::string> names;
-  Eigen::MatrixXd hessian, correlation;
+  std::vector<std::string> names, flat;  // names: the parameters of gauss_newton and correlation
+  Eigen::MatrixXd gauss_newton, correlation;
   std::string failure;
 };
 ParameterCorrelation parameter_correlation(const Problem& problem, const PhysicalParameters& at,

@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """The diagnosis benchmark (tools/diagnosis-benchmark.sh): observations made with one effect
 switched on (two strengths) or none, partly with another discretisation than the fit's; each
-diagnosed by `ssc diagnose` from a scene without the effect. Prints a table and writes the
-results as JSON; --markdown PATH fills the generated part of docs/diagnosis.md."""
+diagnosed by `ssc diagnose` from a scene without the effect. Prints a line per case and writes
+the results as JSON and as the Markdown table of docs/diagnosis.md (--json PATH, PATH.md)."""
 import argparse, copy, json, os, subprocess, sys, time
 
 # Positions are off the grid planes by a few millimetres: a cube whose faces lie on grid planes
@@ -42,7 +42,7 @@ def finer_grid(scene):
     s["grid"]["cell_size"] /= 2
     return s
 
-def case(name, effect, strength, data, fit, cross=False):
+def case(name, effect, strength, data, fit, cross=""):  # cross: how the data's discretisation differs
     return {"name": name, "effect": effect, "strength": strength, "data": data, "fit": fit, "cross": cross}
 
 def cases():
@@ -51,19 +51,19 @@ def cases():
     base = cube([0, 0.45, 0], [1.5, 0.5, 0]); base["observation"] = camera([0.6, 0.6, 1.8], [0.6, 0.2, 0])
     for strength, mu in (("subtle", 0.15), ("clear", 0.4)):
         d = copy.deepcopy(base); d["ground"]["friction"] = mu
-        out.append(case(f"friction {mu}", "friction", strength, finer(d), base, True))
+        out.append(case(f"friction {mu}", "friction", strength, finer(d), base, "half dt"))
     # air drag: a sphere thrown up and across, bouncing once
     base = sphere([0, 0.3, 0], [1.2, 2.0, 0]); base["observation"] = camera([0.5, 0.6, 2.0], [0.5, 0.4, 0])
     for strength, rho in (("subtle", 8.0), ("clear", 25.0)):
         d = copy.deepcopy(base); d["air_drag"] = rho
-        out.append(case(f"air drag {rho:g} kg/m^3", "air_drag", strength, finer(d), base, True))
+        out.append(case(f"air drag {rho:g} kg/m^3", "air_drag", strength, finer(d), base, "half dt"))
     # second plane: a cube sliding into a wall at x = 0.5 m
     base = cube([0, 0.101, 0], [2.0, 0.0, 0]); base["observation"] = camera([0.3, 0.6, 1.6], [0.3, 0.1, 0])
     for strength, x in (("subtle", 0.75), ("clear", 0.5)):
         d = copy.deepcopy(base)
         d["ground"] = {"stiffness": 1e5, "softmin_alpha": 300,
                        "planes": [{"height": 0.0}, {"angles_deg": [90, 180], "height": -x}]}
-        out.append(case(f"wall at {x} m", "second_plane", strength, finer(d), base, True))
+        out.append(case(f"wall at {x} m", "second_plane", strength, finer(d), base, "half dt"))
     # nonlinear material: a soft cube thrown down hard, squashed at the bounce
     base = cube([0, 0.15, 0], [0.3, -3.0, 0], E=1e4); base["ground"]["stiffness"] = 1e6
     base["time"] = {"dt": 0.005, "steps": 120, "theta": 0.5}; base["observation"] = camera([0.3, 0.4, 1.2], [0.05, 0.1, 0])
@@ -84,9 +84,9 @@ def cases():
     fly = cube([0, 0.45, 0], [1.5, 0.5, 0]); fly["observation"] = camera([0.6, 0.6, 1.8], [0.6, 0.2, 0])
     ball = sphere([0, 0.3, 0], [1.2, 2.0, 0]); ball["observation"] = camera([0.5, 0.6, 2.0], [0.5, 0.4, 0])
     out.append(case("clean cube", "none", "-", fly, fly))
-    out.append(case("clean cube, half dt", "none", "-", finer(fly), fly, True))
+    out.append(case("clean cube, half dt", "none", "-", finer(fly), fly, "half dt"))
     out.append(case("clean sphere", "none", "-", ball, ball))
-    out.append(case("clean sphere, half cells", "none", "-", finer_grid(ball), ball, True))
+    out.append(case("clean sphere, half cells", "none", "-", finer_grid(ball), ball, "half cells"))
     return out
 
 def timing_cases():
@@ -110,8 +110,8 @@ def main():
     ap.add_argument("--ssc", required=True)
     ap.add_argument("--work", required=True)
     ap.add_argument("--device", default="cpu")
-    ap.add_argument("--starts", type=int, default=4)
-    ap.add_argument("--iterations", type=int, default=20)
+    ap.add_argument("--starts", type=int, default=8)        # ssc diagnose's defaults
+    ap.add_argument("--iterations", type=int, default=30)
     ap.add_argument("--only", default="", help="comma-separated parts of case names")
     ap.add_argument("--json", default="")
     ap.add_argument("--timing", action="store_true", help="only the 360-step timing case")
@@ -145,12 +145,37 @@ def main():
                         "cause": j["cause"], "gain": winner.get("gain"), "gain_low": winner.get("gain_low"),
                         "gain_high": winner.get("gain_high"), "heldout_before": j["base"]["heldout_cost"],
                         "heldout_after": winner.get("heldout_after"), "confounded": j["confounded"],
-                        "gains": {k: v.get("gain") for k, v in cand.items()}, "seconds": wall, "device": a.device})
+                        "placebo_gain": winner.get("placebo_gain"),
+                        "gains": {k: v.get("gain") for k, v in cand.items()},
+                        "placebo_gains": {k: v.get("placebo_gain") for k, v in cand.items()},
+                        "indistinguishable": j.get("identifiability", {}).get("indistinguishable", []),
+                        "seconds": wall, "device": a.device})
         x = results[-1]
         print(f"{c['name']:32s} effect {c['effect']:24s} named {j['cause']:24s} "
               f"gain {x['gain'] if x['gain'] is not None else float('nan'):.2f} {wall:6.1f} s", flush=True)
     if a.json:
         json.dump(results, open(a.json, "w"), indent=1)
+        open(a.json + ".md", "w").write(markdown(results))
+
+def markdown(results):
+    """The table of docs/diagnosis.md."""
+    rows = ["| case | effect | strength | data | named | gain (90 % interval) | its placebo | held-out cost before -> after | "
+            "confounded | time |", "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in results:
+        if r.get("cause") in ("failed", "observe failed"):
+            rows.append(f"| {r['name']} | {r['effect']} | {r['strength']} | | **{r['cause']}** | | | | | |"); continue
+        data = r.get("cross") or "same"
+        named = r["cause"] if r["cause"] == r["effect"] else f"**{r['cause']}**"
+        if r["cause"] == "none" and r["effect"] != "none":
+            g = r["gains"].get(r["effect"])
+            named += f" ({r['effect']} {100 * g:.0f} %)" if g is not None else ""
+        gain = f"{100 * r['gain']:.0f} % ({100 * r['gain_low']:.0f}..{100 * r['gain_high']:.0f})" if r.get("gain") is not None else "-"
+        placebo = f"{100 * r['placebo_gain']:.0f} %" if r.get("placebo_gain") is not None else "-"
+        after = f" -> {r['heldout_after']:.3g}" if r.get("heldout_after") is not None else ""
+        conf = "; ".join(f"{x} / {y}" for x, y in r.get("confounded", [])) or "-"
+        rows.append(f"| {r['name']} | {r['effect']} | {r['strength']} | {data} | {named} | {gain} | {placebo} | "
+                    f"{r['heldout_before']:.3g}{after} | {conf} | {r['seconds']:.1f} s |")
+    return "\n".join(rows) + "\n"
 
 if __name__ == "__main__":
     main()
