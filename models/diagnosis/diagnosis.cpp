@@ -809,6 +809,16 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
                                   a, b, r));
   if (!named.empty() && !d.identifiability.failure.empty())
     d.lines.push_back("identifiability not assessed: " + d.identifiability.failure);
+  if (d.indistinguishable.empty() && d.identifiability.correlation.rows() >= 2) {
+    const Eigen::MatrixXd& c = d.identifiability.correlation;
+    Eigen::Index bi = 0, bj = 1;
+    for (Eigen::Index i = 0; i < c.rows(); ++i)
+      for (Eigen::Index j = i + 1; j < c.cols(); ++j)
+        if (std::abs(c(i, j)) > std::abs(c(bi, bj))) bi = i, bj = j;
+    d.lines.push_back(fmt::format("identifiability (Gauss-Newton, at the fit): no two parameters trade off (the largest "
+                                  "correlation: {} and {}, {:+.2f})",
+                                  d.identifiability.names[size_t(bi)], d.identifiability.names[size_t(bj)], c(bi, bj)));
+  }
   std::string flat;
   for (const std::string& f : d.identifiability.flat)
     if (owner(f) == d.cause || base_values.count(f)) flat += (flat.empty() ? "" : ", ") + f;
