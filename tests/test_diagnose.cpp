@@ -6,10 +6,13 @@
 //    "none" for clean data made with half the fit's time step (the base model never matches
 //    exactly, as with a real recording);
 //  - bad input (a missing or malformed --params, an unknown candidate) is an input error that
-//    writes nothing.
+//    writes nothing;
+//  - the identifiability measure (parameter_correlation) finds the classic pair, air drag and
+//    mass damping, and not the Young's modulus against either.
 // The benchmark of every effect and strength is tools/diagnosis-benchmark.sh (docs/diagnosis.md).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -118,6 +121,13 @@ TEST_F(DiagnoseCli, NamesFrictionHiddenInDataFromASmallerTimeStep) {
   const json d = diagnose(cube_scene(0.01, 0.0, 1.25e5, false), "obs", "diag");
   ASSERT_FALSE(d.is_null());
   EXPECT_EQ(d["cause"], "friction");
+  // The identifiability at the friction fit: over the base, friction, the other extensions
+  // that share its graph and the mass damping; friction is among the determined parameters.
+  const json& id = d["identifiability"];
+  EXPECT_EQ(id["failure"], "");
+  const std::vector<std::string> determined = id["parameters"];
+  EXPECT_NE(std::find(determined.begin(), determined.end(), "ground.friction"), determined.end());
+  EXPECT_EQ(id["correlation"].size(), determined.size());
   const std::string html = [&] {
     std::ifstream in(dir_ / "diag" / "report.html");
     std::stringstream s;

@@ -804,20 +804,26 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   for (const auto& [a, b] : d.confounded)
     d.lines.push_back(fmt::format("{} or {}: indistinguishable with this data", a, b));
   for (const auto& [a, b, r] : d.indistinguishable)
-    d.lines.push_back(fmt::format("{} and {}: correlation {:+.3f} at the fit (Gauss-Newton): the data fix a "
+    if (owner(a) == d.cause || owner(b) == d.cause)
+      d.lines.push_back(fmt::format("{} and {}: correlation {:+.3f} at the fit (Gauss-Newton): the data fix a "
                                   "combination of them, not each",
                                   a, b, r));
   if (!named.empty() && !d.identifiability.failure.empty())
     d.lines.push_back("identifiability not assessed: " + d.identifiability.failure);
-  if (d.indistinguishable.empty() && d.identifiability.correlation.rows() >= 2) {
+  if (d.confounded.empty() && d.identifiability.correlation.rows() >= 2) {
+    // The cause's parameter with the largest correlation with another, when none is near +-1.
     const Eigen::MatrixXd& c = d.identifiability.correlation;
-    Eigen::Index bi = 0, bj = 1;
+    const std::vector<std::string>& n = d.identifiability.names;
+    Eigen::Index bi = -1, bj = -1;
     for (Eigen::Index i = 0; i < c.rows(); ++i)
       for (Eigen::Index j = i + 1; j < c.cols(); ++j)
-        if (std::abs(c(i, j)) > std::abs(c(bi, bj))) bi = i, bj = j;
-    d.lines.push_back(fmt::format("identifiability (Gauss-Newton, at the fit): no two parameters trade off (the largest "
-                                  "correlation: {} and {}, {:+.2f})",
-                                  d.identifiability.names[size_t(bi)], d.identifiability.names[size_t(bj)], c(bi, bj)));
+        if ((owner(n[size_t(i)]) == d.cause || owner(n[size_t(j)]) == d.cause) &&
+            (bi < 0 || std::abs(c(i, j)) > std::abs(c(bi, bj))))
+          bi = i, bj = j;
+    if (bi >= 0)
+      d.lines.push_back(fmt::format("identifiability (Gauss-Newton, at the fit): nothing trades off against {} (its "
+                                    "largest correlation: {} and {}, {:+.2f})",
+                                    d.cause, n[size_t(bi)], n[size_t(bj)], c(bi, bj)));
   }
   std::string flat;
   for (const std::string& f : d.identifiability.flat)
