@@ -33,6 +33,7 @@
 
 #include "runtime/errors.h"
 #include "tests/expect_input_error.h"
+#include "tests/gpu_test_support.h"
 #include "models/optim/optimizer.h"
 #include "models/optim/parameter_space.h"
 #include "models/optim/reconstruction.h"
@@ -933,6 +934,7 @@ TEST(ReconstructionStarts, BoundedAndFreeParametersStayInTheirRanges) {
 // ---- reconstruction end to end ---------------------------------------------------------
 
 constexpr double kTrueYoungsModulus = 2e4;  // Pa
+constexpr double kEarlyStopGradient = 2e-4;  // ||dJ/dz||; at the start: 2.9e-5 at the truth, 2.6e-3 and more away
 
 // A sphere thrown onto the ground, seen by two depth cameras (see the file comment).
 json sphere_scene() {
@@ -1105,6 +1107,38 @@ TEST(ReconstructionEndToEnd, StartsFittingDifferentParametersMatchTheirOwnFits) 
   EXPECT_THROW(reconstruct(problem, o), InputError);
 }
 
+
+TEST(GpuReconstruct, AStartThatStopsEarlyLeavesTheOthersAsOnTheCpu) {
+  // On the GPU the batch keeps its size when a start stops (its place runs a copy of a running
+  // start, whose result is dropped): the start at the truth stops at once on the gradient
+  // tolerance, the two others go on, each as on the CPU.
+  const Problem& problem = sphere_problem();
+  ReconstructionOptions o;
+  o.fit = {"youngs_modulus"};
+  o.optimizer = "rprop";
+  o.optimizer_options.max_iterations = 5;
+  o.optimizer_options.gradient_tolerance = kEarlyStopGradient;
+  o.initial_values = {vec({kTrueYoungsModulus}), vec({0.4 * kTrueYoungsModulus}), vec({3 * kTrueYoungsModulus})};
+  const ReconstructionResult cpu = reconstruct(problem, o);
+  for (const StartRecord& c : cpu.starts)
+    std::printf("cpu: %d iterations (%s), initial gradient norm %.3g\n", c.iterations, c.stop_reason.c_str(),
+                c.initial_gradient_norm);
+  ASSERT_LT(cpu.starts[0].iterations, 3);
+  ASSERT_EQ(cpu.starts[1].iterations, 5);
+  SKIP_WITHOUT_GPU();
+  o.device = "cuda";
+  const ReconstructionResult gpu = reconstruct(problem, o);
+  ASSERT_EQ(gpu.starts.size(), 3u);
+  for (int s = 0; s < 3; ++s) {
+    const StartRecord &c = cpu.starts[s], &g = gpu.starts[s];
+    ASSERT_FALSE(g.failed) << g.failure;
+    std::printf("start %d: cpu %d iterations, E %.10g; gpu %d iterations, E %.10g\n", s, c.iterations, c.final[0],
+                g.iterations, g.final[0]);
+    EXPECT_EQ(g.iterations, c.iterations);
+    EXPECT_NEAR(g.final[0], c.final[0], 1e-9 * c.final[0]);
+    EXPECT_NEAR(g.final_cost, c.final_cost, 1e-9 * c.final_cost);
+  }
+}
 
 TEST(ReconstructionEndToEnd, FiniteDifferenceGradientsTakeTheSameSteps) {
   // The optimiser fed central differences instead of the adjoint: R-Prop only uses the

@@ -470,10 +470,6 @@ ModelSpec candidate_spec(const std::string& name, int planes, double extent) {
 
 std::string percent(double x) { return fmt::format("{:.0f} %", 100 * x); }
 
-}  // namespace
-
-namespace {
-
 // The extension a parameter belongs to ("mass_damping" and the base's own for the others).
 std::string owner(const std::string& parameter) {
   if (parameter.find("friction") != std::string::npos) return "friction";
