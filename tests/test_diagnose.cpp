@@ -128,6 +128,15 @@ TEST_F(DiagnoseCli, NamesFrictionHiddenInDataFromASmallerTimeStep) {
   const std::vector<std::string> determined = id["parameters"];
   EXPECT_NE(std::find(determined.begin(), determined.end(), "ground.friction"), determined.end());
   EXPECT_EQ(id["correlation"].size(), determined.size());
+  // Friction's event is the landing, in the held-in frames; after it, friction pays for its
+  // parameter (the Akaike difference is negative).
+  for (const json& c : d["candidates"])
+    if (c["name"] == "friction") {
+      EXPECT_GT(c["event"]["frame"].get<int>(), 0);
+      EXPECT_LT(c["event"]["frame"].get<int>(), d["heldin_frames"].get<int>());
+      EXPECT_LT(c["event"]["aic_difference"].get<double>(), 0);
+      EXPECT_GT(c["event"]["heldin_gain"].get<double>(), 0.2);
+    }
   const std::string html = [&] {
     std::ifstream in(dir_ / "diag" / "report.html");
     std::stringstream s;

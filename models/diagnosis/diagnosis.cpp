@@ -12,6 +12,7 @@
 #include <set>
 
 #include "models/cost/surface_constraint.h"
+#include "models/diagnosis/residuals.h"
 #include "models/optim/reconstruction.h"
 #include "models/sim/parameters.h"
 #include "runtime/errors.h"
@@ -468,6 +469,29 @@ ModelSpec candidate_spec(const std::string& name, int planes, double extent) {
   return spec;
 }
 
+// The first frame from which an extension acts in its fit (see CandidateVerdict), -1 if never.
+int event_frame(const FittedModel& m, const std::string& device) {
+  if (m.name == "air_drag") return 0;
+  const Residuals r = compute_residuals(m.problem, with_values(m.problem.scene, m.names, m.values), device);
+  const int added = m.name == "second_plane" ? int(m.problem.scene.planes.size()) - 1 : -1;
+  for (const FrameResiduals& f : r.frames)
+    if (f.phase == "contact" && (added < 0 || f.plane == added)) return f.frame;
+  return -1;
+}
+
+// Twice the summed point costs of frames [from, to): the residual sum of squares for small
+// residuals (surface_constraint.h), and the number of observed points there.
+std::pair<double, double> residual_sum(const std::vector<double>& frame_costs, const Problem& p, int from, int to) {
+  double rss = 0, n = 0;
+  for (int f = std::max(0, from); f < to && f < int(frame_costs.size()); ++f) {
+    const ObservedFrame& frame = p.frames[size_t(f)];
+    if (frame.points.empty() || !(frame.weight > 0)) continue;
+    rss += 2 * frame_costs[size_t(f)] * double(frame.points.size()) / frame.weight;
+    n += double(frame.points.size());
+  }
+  return {rss, n};
+}
+
 std::string percent(double x) { return fmt::format("{:.0f} %", 100 * x); }
 
 // The extension a parameter belongs to ("mass_damping" and the base's own for the others).
@@ -749,6 +773,19 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
     v.placebo_gain = std::max(0.0, placebo_gain(extra));
     v.passes = v.gain >= o.min_gain && v.gain_low > v.placebo_gain + o.margin;
     if (v.passes) named.push_back(i);
+    try {
+      v.event_frame = event_frame(m, o.device);
+    } catch (const std::exception& e) {
+      v.warnings.push_back(std::string("the event's frame was not found: ") + e.what());
+    }
+    if (v.event_frame >= 0 && v.event_frame < d.heldin_frames) {
+      const auto [rss_base, n] = residual_sum(d.base.frame_costs, m.problem, v.event_frame, d.heldin_frames);
+      const double rss = residual_sum(m.frame_costs, m.problem, v.event_frame, d.heldin_frames).first;
+      if (rss_base > 0 && rss > 0) {
+        v.event_gain = 1 - rss / rss_base;
+        v.event_aic = n * std::log(rss / rss_base) + 2.0 * double(extra);
+      }
+    }
   }
   std::sort(named.begin(), named.end(), [&](size_t a, size_t b) { return d.verdicts[a].gain > d.verdicts[b].gain; });
   if (!named.empty()) d.cause = d.verdicts[named[0]].name;
@@ -887,6 +924,13 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
       c["passes"] = false;
     }
     c["score"] = std::isnan(v.score) ? nlohmann::json(nullptr) : nlohmann::json(v.score);
+    auto number = [](double x) { return std::isnan(x) ? nlohmann::json(nullptr) : nlohmann::json(x); };
+    c["event"] = {{"frame", v.event_frame},
+                  {"time_s", v.event_frame >= 0 && !m.failed ? nlohmann::json(m.problem.frames[size_t(v.event_frame)].step *
+                                                                              m.problem.scene.time.dt)
+                                                             : nlohmann::json(nullptr)},
+                  {"heldin_gain", number(v.event_gain)},
+                  {"aic_difference", number(v.event_aic)}};
     c["warnings"] = v.warnings;
     candidates.push_back(c);
   }

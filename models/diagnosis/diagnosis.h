@@ -5,25 +5,31 @@
 // held-in frames; so is each candidate extension (the base parameters plus the extension's
 // own; the same starts for the base parameters, the same iterations), and a placebo of the
 // same number of extra parameters that stand for no missing effect (initial velocity
-// components the base leaves alone). Each fitted model then predicts the held-out frames; a candidate's gain is the
-// fraction of the base model's held-out cost (J_SSC) it removes, with a moving-block
-// bootstrap interval over the held-out frames. A candidate is named when its gain is at
-// least `min_gain` and its interval's lower end beats its placebo's gain by `margin`; the
-// cause is the named candidate with the largest gain, or "none". Two named candidates whose
-// gains differ by less than their difference's interval are reported as confounded.
+// components the base leaves alone, those the body's motion does not use first). The base,
+// the placebos and the extensions with an "off" value (friction, air drag, a stiffness
+// gradient) share one graph and are fitted as one batch, each start moving only its own
+// model's parameters; the Neo-Hookean material and a second plane (proposed from where the
+// base fit overshoots the data) are batches of their own.
+// Each fitted model then predicts the held-out frames; a candidate's gain is the fraction of
+// the base model's held-out cost (J_SSC) it removes, with a moving-block bootstrap interval
+// over the held-out frames. A candidate is named when its gain is at least `min_gain` and its
+// interval's lower end beats its placebo's gain by `margin`; the cause is the named candidate
+// with the largest gain, or "none". Two named candidates whose gains differ by less than their
+// difference's interval are reported as confounded. Each candidate is also scored, in-sample
+// with an Akaike penalty, on the held-in frames after the event it is about (reported only).
 // Identifiability: at the cause's fit, the Gauss-Newton matrix of the held-in residuals over
 // its parameters, the other candidates' that share its graph and the mass damping
-// (parameter_correlation below);
-// two of them with a correlation near +-1 trade one for the other: the data cannot tell them
-// apart ("air drag or mass damping").
-// Before the fits, a score test ranks the candidates that have parameters with an "off"
-// value: the held-in cost's gradient at the base fit with the extension at off (friction,
-// air drag, a stiffness gradient: one backward pass for all), as the cost decrease it
-// predicts for a typical amount of the effect.
+// (parameter_correlation below); two of them with a correlation near +-1 trade one for the
+// other: the data cannot tell them apart ("air drag or mass damping").
+// A score test ranks the candidates that have parameters with an "off" value: the held-in
+// cost's gradient at the base fit with the extension at off (friction, air drag, a stiffness
+// gradient: one backward pass for all), as the cost decrease it predicts for a typical amount
+// of the effect.
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -73,6 +79,13 @@ struct CandidateVerdict {
   double placebo_gain = 0;
   double score = std::numeric_limits<double>::quiet_NaN();  // predicted relative held-in decrease
   bool passes = false;
+  // The frames after the event the extension is about (the first contact with any plane; with
+  // the added plane for second_plane; frame 0 for air drag), held-in part: the fraction of the
+  // base's cost removed there, and the Akaike difference n ln(RSS / RSS_base) + 2 k over its n
+  // observed points (negative favours the extension; k its extra parameters). -1: no event.
+  int event_frame = -1;
+  double event_gain = std::numeric_limits<double>::quiet_NaN();
+  double event_aic = std::numeric_limits<double>::quiet_NaN();
   std::vector<std::string> warnings;
 };
 

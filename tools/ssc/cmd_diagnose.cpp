@@ -113,10 +113,12 @@ Command register_diagnose(CLI::App& app) {
     write_text_file(out.file("diagnosis.json"), dj.dump(2) + "\n");
     write_report_html(out.file("report.html"), data);
     out.commit();
-    std::printf("%-24s %10s %22s %9s %9s\n", "candidate", "gain", "90 % interval", "placebo", "score");
+    std::printf("%-24s %10s %22s %9s %9s %16s\n", "candidate", "gain", "90 % interval", "placebo", "score",
+                "after event: AIC");
     for (const CandidateVerdict& v : d.verdicts)
-      std::printf("%-24s %9.1f%% %9.1f%% .. %6.1f%% %8.1f%% %9.3g%s\n", v.name.c_str(), 100 * v.gain, 100 * v.gain_low,
-                  100 * v.gain_high, 100 * v.placebo_gain, v.score, v.passes ? "  named" : "");
+      std::printf("%-24s %9.1f%% %9.1f%% .. %6.1f%% %8.1f%% %9.3g %16.4g%s\n", v.name.c_str(), 100 * v.gain,
+                  100 * v.gain_low, 100 * v.gain_high, 100 * v.placebo_gain, v.score, v.event_aic,
+                  v.passes ? "  named" : "");
     for (const std::string& line : d.lines) std::printf("%s\n", line.c_str());
     std::printf("wrote %s: diagnosis.json, report.html, residuals (%.1f s)\n", o->out.c_str(), d.seconds);
     return 0;
