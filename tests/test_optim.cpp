@@ -1107,18 +1107,24 @@ TEST(ReconstructionEndToEnd, StartsFittingDifferentParametersMatchTheirOwnFits) 
   EXPECT_THROW(reconstruct(problem, o), InputError);
 }
 
+// R-Prop fitting the Young's modulus from the given starts.
+ReconstructionOptions youngs_modulus_fit(int iterations, std::vector<Vec> initial) {
+  ReconstructionOptions o;
+  o.fit = {"youngs_modulus"};
+  o.optimizer = "rprop";
+  o.optimizer_options.max_iterations = iterations;
+  o.initial_values = std::move(initial);
+  return o;
+}
 
 TEST(GpuReconstruct, AStartThatStopsEarlyLeavesTheOthersAsOnTheCpu) {
   // On the GPU the batch keeps its size when a start stops (its place runs a copy of a running
   // start, whose result is dropped): the start at the truth stops at once on the gradient
   // tolerance, the two others go on, each as on the CPU.
   const Problem& problem = sphere_problem();
-  ReconstructionOptions o;
-  o.fit = {"youngs_modulus"};
-  o.optimizer = "rprop";
-  o.optimizer_options.max_iterations = 5;
+  ReconstructionOptions o =
+      youngs_modulus_fit(5, {vec({kTrueYoungsModulus}), vec({0.4 * kTrueYoungsModulus}), vec({3 * kTrueYoungsModulus})});
   o.optimizer_options.gradient_tolerance = kEarlyStopGradient;
-  o.initial_values = {vec({kTrueYoungsModulus}), vec({0.4 * kTrueYoungsModulus}), vec({3 * kTrueYoungsModulus})};
   const ReconstructionResult cpu = reconstruct(problem, o);
   for (const StartRecord& c : cpu.starts)
     std::printf("cpu: %d iterations (%s), initial gradient norm %.3g\n", c.iterations, c.stop_reason.c_str(),
@@ -1145,11 +1151,7 @@ TEST(ReconstructionEndToEnd, FiniteDifferenceGradientsTakeTheSameSteps) {
   // gradient's sign, so both must take exactly the same path while the two agree in sign;
   // the probes are counted as evaluations.
   const Problem& problem = sphere_problem();
-  ReconstructionOptions o;
-  o.fit = {"youngs_modulus"};
-  o.optimizer = "rprop";
-  o.optimizer_options.max_iterations = 4;
-  o.initial_values = {vec({0.5 * kTrueYoungsModulus})};
+  ReconstructionOptions o = youngs_modulus_fit(4, {vec({0.5 * kTrueYoungsModulus})});
   const ReconstructionResult adjoint = reconstruct(problem, o);
   o.finite_differences = true;
   const ReconstructionResult fd = reconstruct(problem, o);
