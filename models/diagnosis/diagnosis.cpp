@@ -130,11 +130,20 @@ FittedModel fit_model(const ModelSpec& spec, const std::string& scene_path, cons
   return m;
 }
 
+// The extension a parameter belongs to ("mass_damping" and the base's own for the others).
+std::string owner(const std::string& parameter) {
+  if (parameter.find("friction") != std::string::npos) return "friction";
+  if (parameter == "air_drag") return "air_drag";
+  if (parameter.find("stiffness_gradient") != std::string::npos) return "heterogeneous_stiffness";
+  if (parameter.rfind("ground.planes[", 0) == 0 && parameter.find(".height") != std::string::npos) return "second_plane";
+  return parameter;
+}
+
 // The value a parameter of the shared graph keeps in a model that does not fit it: an
 // extension's "off" value, or the scene's.
 double off_value(const std::string& name, const PhysicalParameters& scene_values) {
-  for (const char* off : {"friction", "air_drag", "stiffness_gradient"})
-    if (name.find(off) != std::string::npos) return 0.0;
+  const std::string o = owner(name);
+  if (o == "friction" || o == "air_drag" || o == "heterogeneous_stiffness") return 0.0;
   return get_parameter(scene_values, name);
 }
 
@@ -494,15 +503,6 @@ std::pair<double, double> residual_sum(const std::vector<double>& frame_costs, c
 
 std::string percent(double x) { return fmt::format("{:.0f} %", 100 * x); }
 
-// The extension a parameter belongs to ("mass_damping" and the base's own for the others).
-std::string owner(const std::string& parameter) {
-  if (parameter.find("friction") != std::string::npos) return "friction";
-  if (parameter == "air_drag") return "air_drag";
-  if (parameter.find("stiffness_gradient") != std::string::npos) return "heterogeneous_stiffness";
-  if (parameter.rfind("ground.planes[", 0) == 0 && parameter.find(".height") != std::string::npos) return "second_plane";
-  return parameter;
-}
-
 // Fills d.identifiability and d.indistinguishable at the fit m of the cause: over m's
 // parameters, the mass damping, and (shared: the graph m was fitted in, with every extension
 // that has an off value) the other candidates' parameters at off. Steps: 1e-3 of a value, 1e-2
@@ -545,8 +545,8 @@ void identifiability_at(Diagnosis& d, const FittedModel& m, const Problem* share
       const bool listed = std::any_of(d.confounded.begin(), d.confounded.end(), [&](const auto& p) {
         return (p.first == m.name && p.second == other) || (p.first == other && p.second == m.name);
       });
-      if (!listed && (other == "mass_damping" || other == "friction" || other == "air_drag" ||
-                      other == "heterogeneous_stiffness" || other == "second_plane"))
+      const auto& candidates = diagnosis_candidate_names();
+      if (!listed && (other == "mass_damping" || std::find(candidates.begin(), candidates.end(), other) != candidates.end()))
         d.confounded.push_back({m.name, other});
     }
 }
