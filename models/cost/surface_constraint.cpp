@@ -247,7 +247,7 @@ std::vector<SurfaceConstraintCost::PointResidual> SurfaceConstraintCost::point_r
     for (int k = 0; k < 8; ++k) {
       const long n = cells_[m.cell] + (k & 1) + ((k >> 1) & 1) * nx + ((k >> 2) & 1) * nxy;
       X[k] = node_point(grid_, corners_[m.cell][k], n, u, band_u);
-      const Eigen::Vector3d r = s.node_position(int(n % nx), int((n / nx) % s.size.y()), int(n / nxy));
+      const Eigen::Vector3d r = s.node_position(n);
       X0[k] = make_vec3(r.x(), r.y(), r.z());
       phi[k] = s.phi[n];
     }

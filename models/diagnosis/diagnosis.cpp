@@ -20,6 +20,10 @@
 namespace ssc {
 namespace {
 
+// Typical amounts of an effect: the score test's predicted decrease and the identifiability's
+// steps at off are taken at these.
+constexpr double kTypicalFriction = 0.3, kTypicalAirDrag = 10;  // 1, kg/m^3
+
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -298,7 +302,6 @@ PlaneProposal propose_plane(const FittedModel& base, int heldin) {
   Simulation sim(p.scene, p.grid, 1, false);
   sim.set_parameters(0, params);
   int step = 0;
-  const long nx = p.grid.sdf.size.x(), nxy = nx * p.grid.sdf.size.y();
   for (int f = 0; f < heldin; ++f) {
     const ObservedFrame& frame = p.frames[size_t(f)];
     while (step < frame.step) sim.step(), ++step;
@@ -307,9 +310,8 @@ PlaneProposal propose_plane(const FittedModel& base, int heldin) {
       for (const Eigen::Vector3d& x : frame.points) observed[d] = std::max(observed[d], x.dot(directions[d]));
       if (frame.points.empty()) continue;
       for (int i = 0; i < p.grid.node_count; ++i) {
-        const long n = p.grid.node_grid[size_t(i)];
-        const Eigen::Vector3d x = p.grid.sdf.node_position(int(n % nx), int((n / nx) % p.grid.sdf.size.y()), int(n / nxy)) +
-                                  Eigen::Vector3d(u[3 * i], u[3 * i + 1], u[3 * i + 2]);
+        const Eigen::Vector3d x =
+            p.grid.sdf.node_position(p.grid.node_grid[size_t(i)]) + Eigen::Vector3d(u[3 * i], u[3 * i + 1], u[3 * i + 2]);
         simulated[d] = std::max(simulated[d], x.dot(directions[d]));
       }
     }
@@ -393,8 +395,8 @@ std::map<std::string, double> score_test(const FittedModel& base, const std::str
   if (!(r.cost > 0)) return score;
   double friction = 0;
   for (int k = 0; k < planes; ++k) friction += parameter_gradient(r.gradient, params, plane_parameter(k, "friction"));
-  score["friction"] = std::max(0.0, -0.3 * friction) / r.cost;
-  score["air_drag"] = std::max(0.0, -10.0 * parameter_gradient(r.gradient, params, "air_drag")) / r.cost;
+  score["friction"] = std::max(0.0, -kTypicalFriction * friction) / r.cost;
+  score["air_drag"] = std::max(0.0, -kTypicalAirDrag * parameter_gradient(r.gradient, params, "air_drag")) / r.cost;
   Eigen::Vector3d g;
   for (int a = 0; a < 3; ++a)
     g[a] = parameter_gradient(r.gradient, params, std::string("material.stiffness_gradient.") + "xyz"[a]);
@@ -436,10 +438,8 @@ std::vector<std::string> placebo_parameters(const Scene& scene, const std::vecto
 // The largest extent of the rest body (m).
 double body_extent(const SimGrid& grid) {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-  const long nx = grid.sdf.size.x(), nxy = nx * grid.sdf.size.y();
   for (int i = 0; i < grid.node_count; ++i) {
-    const long n = grid.node_grid[size_t(i)];
-    const Eigen::Vector3d x = grid.sdf.node_position(int(n % nx), int((n / nx) % grid.sdf.size.y()), int(n / nxy));
+    const Eigen::Vector3d x = grid.sdf.node_position(grid.node_grid[size_t(i)]);
     lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
   }
   return grid.node_count > 0 ? (hi - lo).maxCoeff() : 1.0;
@@ -526,7 +526,10 @@ void identifiability_at(Diagnosis& d, const FittedModel& m, const Problem* share
   for (const std::string& n : names) {
     const double v = get_parameter(at, n);
     const std::string o = owner(n);
-    const double typical = o == "friction" ? 0.3 : o == "air_drag" ? 10 : o == "heterogeneous_stiffness" ? 2 / extent : 1.0;
+    const double typical = o == "friction"                  ? kTypicalFriction
+                           : o == "air_drag"                ? kTypicalAirDrag
+                           : o == "heterogeneous_stiffness" ? 2 / extent
+                                                            : 1.0;
     steps.push_back(v != 0 ? 1e-3 * std::abs(v) : 1e-2 * typical);
   }
   Problem heldin = problem;

@@ -19,10 +19,8 @@ std::vector<double> plane_clearances(const SimGrid& grid, const PhysicalParamete
   for (const PlaneSpec& plane : p.planes) {
     double lowest = std::numeric_limits<double>::infinity();
     for (int i = 0; i < grid.node_count; ++i) {
-      const long n = grid.node_grid[size_t(i)];
-      const long nx = grid.sdf.size.x(), nxy = nx * grid.sdf.size.y();
-      const Eigen::Vector3d x = grid.sdf.node_position(int(n % nx), int((n / nx) % grid.sdf.size.y()), int(n / nxy)) +
-                                Eigen::Vector3d(u[3 * i], u[3 * i + 1], u[3 * i + 2]);
+      const Eigen::Vector3d x =
+          grid.sdf.node_position(grid.node_grid[size_t(i)]) + Eigen::Vector3d(u[3 * i], u[3 * i + 1], u[3 * i + 2]);
       lowest = std::min(lowest, plane.normal.normalized().dot(x) - plane.height);
     }
     out.push_back(lowest);

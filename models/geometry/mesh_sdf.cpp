@@ -303,15 +303,13 @@ void check_inside_is_defined(const SdfGrid& grid, const std::vector<float>& wind
 // close, so each thread starts a node's search from the previous node's closest triangle.
 std::vector<float> fill_signed_distances(const TriangleBvh& bvh, SdfGrid& grid) {
   const long count = grid.node_count();
-  const int nx = grid.size.x(), ny = grid.size.y();
   std::vector<float> winding(count);
 #pragma omp parallel
   {
     int hint = 0;
 #pragma omp for schedule(dynamic, 256)
     for (long n = 0; n < count; ++n) {
-      const Vector3d q =
-          grid.node_position(int(n % nx), int((n / nx) % ny), int(n / (long(nx) * ny)));
+      const Vector3d q = grid.node_position(n);
       const double distance = std::sqrt(bvh.squared_distance(q, hint));
       const double w = bvh.winding_number(q);
       winding[n] = float(w);

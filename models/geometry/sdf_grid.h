@@ -19,6 +19,10 @@ struct SdfGrid {
   Eigen::Vector3d node_position(int i, int j, int k) const {
     return origin + cell_size * Eigen::Vector3d(i, j, k);
   }
+  Eigen::Vector3d node_position(long flat) const {  // of index(i, j, k)
+    const long nx = size.x(), ny = size.y();
+    return node_position(int(flat % nx), int((flat / nx) % ny), int(flat / (nx * ny)));
+  }
   double at(int i, int j, int k) const { return phi[index(i, j, k)]; }
 };
 
