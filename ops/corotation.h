@@ -111,6 +111,34 @@ SSC_HD inline void adj_stiffness_apply_cell(int i, const PartContext<Real>& cx, 
   for (int c = 0; c < 8; ++c) store3(corner_bar, 8 * i + c, pb[c]);
 }
 
+// The theta-scheme's elastic force with each end of the step at its own rotation
+// (solver.corotation = "updated"): theta f(u) + (1 - theta) f(u-), f(x; R) = f_off(R) - K(R) x.
+// The end's -theta K_k u is the system's (A u), and the right-hand side's b_k K_k u- holds
+// -(1 - theta) dt K_k u-, which the (1 - theta) K_k u- here cancels; what is left of the start
+// is its own force f_off(R_n) - K_n u-. A rigid rotation then strains neither end.
+template <class Real>
+SSC_HD inline void theta_elastic_force_cell(int i, const PartContext<Real>&, const Real* theta, const Real* start_force,
+                                            const Real* start_ku, const Real* end_force, const Real* end_ku,
+                                            Real* corner_force) {
+  const Real t = theta[0], s = Real(1) - t;
+  for (int k = 24 * i; k < 24 * i + 24; ++k)
+    corner_force[k] = t * end_force[k] + s * (start_force[k] - start_ku[k] + end_ku[k]);
+}
+
+template <class Real>
+SSC_HD inline void adj_theta_elastic_force_cell(int i, const PartContext<Real>&, const Real* theta,
+                                                const Real* corner_force_bar, Real* start_force_bar,
+                                                Real* start_ku_bar, Real* end_force_bar, Real* end_ku_bar) {
+  const Real t = theta[0], s = Real(1) - t;
+  for (int k = 24 * i; k < 24 * i + 24; ++k) {
+    const Real b = corner_force_bar[k];
+    end_force_bar[k] += t * b;
+    start_force_bar[k] += s * b;
+    start_ku_bar[k] -= s * b;
+    end_ku_bar[k] += s * b;
+  }
+}
+
 #ifdef SSC_OP_SPECS
 // u- gathered at the cell's corners -> its rotation and polar status.
 inline OpSpec corotation_spec() {
@@ -156,6 +184,20 @@ inline OpSpec stiffness_apply_spec() {
                      "$corner", "d_lambda", "d_mu"}),
                part("stiffness_apply_gather", Extent::Node, SSC_ADJOINT_PART(add_corner_sum),
                     {"$corner^", "#node_cell_offset", "#node_cell_entry", "d_u_prev"})};
+  return s;
+}
+
+// The two ends' corotation forces and stiffness products -> the step's elastic corner force.
+inline OpSpec theta_elastic_force_spec() {
+  OpSpec s;
+  s.name = "theta_elastic_force";
+  s.domain = Domain::Cell;
+  s.slots = {constant_in("theta"), in("start_force"), in("start_ku"), in("end_force"), in("end_ku"),
+             out("corner_force")};
+  s.forward = {part("theta_elastic_force", Extent::Cell, SSC_PART(theta_elastic_force_cell),
+                    {"theta", "start_force", "start_ku", "end_force", "end_ku", "corner_force"})};
+  s.adjoint = {part("theta_elastic_force", Extent::Cell, SSC_ADJOINT_PART(adj_theta_elastic_force_cell),
+                    {"theta", "d_corner_force", "d_start_force", "d_start_ku", "d_end_force", "d_end_ku"})};
   return s;
 }
 #endif

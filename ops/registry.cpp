@@ -23,6 +23,7 @@ const std::vector<OpSpec>& op_registry() {
       ops::node_mass_spec(),
       ops::corotation_spec(),
       ops::corotation_force_spec(),
+      ops::theta_elastic_force_spec(),
       ops::contact_force_spec(),
       ops::step_iterate_spec(),
       ops::contact_implicit_spec(),

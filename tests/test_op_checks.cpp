@@ -2,8 +2,8 @@
 // each op of the registry, at the inputs a real timestep gives it (a spinning sphere sliding
 // with friction into a tilted ground, with the displacement extension and every model
 // extension, so that every op is in the graph and contact is active; the ops of the step's
-// nonlinear iterations in the same scene with implicit contact, updated corotation and
-// Neo-Hookean material), is
+// nonlinear iterations in the same scene with implicit contact and updated corotation, with
+// Neo-Hookean and with corotated material), is
 // checked in double for
 //   - the dot-product test: its forward parts instantiated with Dual<double> (forward mode,
 //     exact) against its adjoint parts, <y_bar, J x_dot> = <J^T y_bar, x_dot>;
@@ -42,7 +42,8 @@ namespace {
 using json = nlohmann::json;
 using D = Dual<double>;
 
-// variant 1: the step's nonlinear iterations (implicit contact, updated corotation).
+// variant 1: the step's nonlinear iterations (implicit contact, updated corotation, Neo-Hookean);
+// variant 2: the same with the corotated material (each end of the step at its own rotation).
 json check_scene(int variant = 0) {
   json j;
   j["object"] = {{"primitive", "sphere"}, {"radius", 0.3}, {"position", {0.05, 0.33, -0.03}}};
@@ -60,12 +61,12 @@ json check_scene(int variant = 0) {
                    {{"height", -0.35}, {"normal", {1, 0.2, 0}}, {"stiffness", 1e5}, {"friction", 0.2}}}}};
   j["time"] = {{"dt", 0.01}, {"steps", 4}, {"theta", 0.6}};
   j["solver"] = {{"tolerance", 1e-13}, {"max_iterations", 5000}, {"extension_tolerance", 1e-13}};
-  if (variant == 1) {
+  if (variant >= 1) {
     j["solver"]["contact"] = "implicit";
     j["solver"]["corotation"] = "updated";
     j["solver"]["nonlinear_iterations"] = 2;
-    j["material"]["model"] = "neo_hookean";
   }
+  if (variant == 1) j["material"]["model"] = "neo_hookean";
   return j;
 }
 
@@ -78,7 +79,7 @@ struct CheckedStep {
 // The sphere after four steps (in contact), with the step recomputed so that every tensor
 // holds the values of one consistent step.
 CheckedStep& setup(int variant = 0) {
-  static CheckedStep s[2];
+  static CheckedStep s[3];
   if (!s[variant].sim) {
     CheckedStep& x = s[variant];
     x.scene = parse_scene(check_scene(variant), "op_checks.json");
@@ -182,7 +183,7 @@ constexpr double kDotLimit = 1e-10, kFdLimit = 1e-6, kFloatLimit = 2e-3;
 
 TEST(OpChecks, EveryRegisteredOpIsInTheCheckedGraph) {
   std::set<std::string> used;
-  for (int variant : {0, 1})
+  for (int variant : {0, 1, 2})
     for (const OpNode& op : setup(variant).sim->timestep_graph().graph.ops()) used.insert(op.name());
   CheckedStep& s = setup();
   for (const OpSpec& spec : op_registry())
@@ -216,7 +217,7 @@ TEST(OpChecks, EveryPartOfEveryOpAgainstDualNumbersFiniteDifferencesAndFloat) {
   std::normal_distribution<double> normal;
   std::vector<CheckRow> rows;
   std::set<std::string> checked;  // each op and binding once, in the first graph that has it
-  for (int variant : {0, 1}) {
+  for (int variant : {0, 1, 2}) {
   CheckedStep& s = setup(variant);
   const Graph& g = s.sim->timestep_graph().graph;
   Interpreter<double>& in = s.sim->interpreter();

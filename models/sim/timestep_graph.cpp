@@ -67,8 +67,8 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
            {{"rotation", "rotation", D::Cell, 9}, {"polar_status", "polar_status", D::Cell, 1}});
   t.rotation = g.find_tensor("rotation");
   // The elastic terms of the start-of-step rotation (one cell kernel with the ops above); an
-  // updated rotation has its own in each iteration.
-  if (!model.updated_corotation && !model.neo_hookean) {
+  // updated rotation adds the end's in each iteration.
+  if (!model.neo_hookean) {
     g.add_op("corotation_force", {P("rotation", t.rotation), P("lambda", t.lambda), P("mu", t.mu)},
              {{"corner_force", "corotation_force", D::Cell, 24}});
     g.add_op("stiffness_apply", {P("rotation", t.rotation), P("lambda", t.lambda), P("mu", t.mu), G("u_prev", t.u_prev)},
@@ -130,8 +130,8 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
       u_theta = g.find_tensor(name("u_theta"));
       offset = g.find_tensor(name("offset"));
     }
-    if (model.updated_corotation) {
-      g.add_op("corotation", {G("u_prev", u_theta)},
+    if (model.updated_corotation) {  // Neo-Hookean's at the theta-point, the corotated's at the end
+      g.add_op("corotation", {G("u_prev", model.neo_hookean ? u_theta : guess)},
                {{"rotation", "rotation_it" + std::to_string(k), D::Cell, 9},
                 {"polar_status", "polar_status_it" + std::to_string(k), D::Cell, 1}});
       rotation = g.find_tensor("rotation_it" + std::to_string(k));
@@ -147,15 +147,20 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
                 P("lambda_system", lambda), P("mu_system", mu)},
                {{"corner_force", name("neo_hookean_force"), D::Cell, 24}});
       step_corner_force = g.find_tensor(name("neo_hookean_force"));
-    } else if (model.updated_corotation) {  // the elastic terms of the iterate's rotation
-      g.add_op("corotation_force", {P("rotation", rotation), P("lambda", t.lambda), P("mu", t.mu)},
-               {{"corner_force", name("corotation_force"), D::Cell, 24}});
-      step_corner_force = g.find_tensor(name("corotation_force"));
     }
     if (model.neo_hookean || model.updated_corotation) {
       g.add_op("stiffness_apply", {P("rotation", rotation), P("lambda", lambda), P("mu", mu), G("u_prev", t.u_prev)},
-               {{"ku_corner", name("k_u_prev"), D::Cell, 24}});
-      ku = g.find_tensor(name("k_u_prev"));
+               {{"ku_corner", name("end_k_u_prev"), D::Cell, 24}});
+      ku = g.find_tensor(name("end_k_u_prev"));
+    }
+    if (model.updated_corotation && !model.neo_hookean) {  // each end of the step at its own rotation
+      g.add_op("corotation_force", {P("rotation", rotation), P("lambda", t.lambda), P("mu", t.mu)},
+               {{"corner_force", name("end_corotation_force"), D::Cell, 24}});
+      g.add_op("theta_elastic_force",
+               {P("theta", t.theta), P("start_force", corner_force), P("start_ku", g.find_tensor("k_u_prev")),
+                P("end_force", g.find_tensor(name("end_corotation_force"))), P("end_ku", ku)},
+               {{"corner_force", name("elastic_force"), D::Cell, 24}});
+      step_corner_force = g.find_tensor(name("elastic_force"));
     }
     int step_point_force = point_force, step_damping = damping, step_body_force = body_force;
     if (implicit_contact) {
