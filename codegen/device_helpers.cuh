@@ -40,7 +40,7 @@ __device__ inline void block_sum(double (&v)[N]) {
 // The reduction parts of op specs (graph/op_spec.h), one block of SSC_ITEM threads per batch
 // item: each thread adds its strided share of a scratch source (c values per index, n
 // indices) to acc[offset ..], block_sum totals them, and thread 0 adds the totals to the
-// target cotangents in turn.
+// target cotangents (or, in a forward, stores them in the target outputs) in turn.
 template <int N, class S>
 __device__ inline void reduction_shares(double (&acc)[N], const S* source, int n, int c, int offset) {
   for (int e = threadIdx.x; e < n; e += SSC_ITEM)
@@ -50,6 +50,11 @@ template <int N, class R>
 __device__ inline void reduction_add(const double (&acc)[N], R* target, int c, int offset) {
   if (threadIdx.x == 0)
     for (int k = 0; k < c; ++k) target[k] += R(acc[offset + k]);
+}
+template <int N, class R>
+__device__ inline void reduction_store(const double (&acc)[N], R* target, int c, int offset) {
+  if (threadIdx.x == 0)
+    for (int k = 0; k < c; ++k) target[k] = R(acc[offset + k]);
 }
 
 // A vector from lane (this lane ^ mask) of the warp (all 32 lanes must take part).

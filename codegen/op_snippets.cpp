@@ -73,10 +73,16 @@ Snippet reduction_snippet(const Graph& g, int op, const PartSpec& p) {
   }
   int offset = 0;
   for (const PartArg& a : p.args) {
-    if (a.kind != PartArg::Kind::Adjoint) continue;
-    b.a(a.name, true);
-    const int c = g.tensor(o.input(a.name)).components;
-    adds += fmt::format("gen::reduction_add(acc, $d_{}, {}, {});\n", a.name, c, offset);
+    if (a.kind == PartArg::Kind::Scratch) continue;
+    const bool store = a.kind == PartArg::Kind::Value;  // a forward's output, else a cotangent
+    const int c = g.tensor(store ? o.output(a.name) : o.input(a.name)).components;
+    if (store) {
+      b.t(a.name, true);
+      adds += fmt::format("gen::reduction_store(acc, ${}, {}, {});\n", a.name, c, offset);
+    } else {
+      b.a(a.name, true);
+      adds += fmt::format("gen::reduction_add(acc, $d_{}, {}, {});\n", a.name, c, offset);
+    }
     offset += c;
   }
   if (offset != total)

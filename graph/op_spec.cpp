@@ -134,7 +134,8 @@ PartSpec reduction(const std::string& label, const std::vector<std::string>& sou
   }
   for (const std::string& t : targets) {
     PartArg a = parse_arg(t);
-    if (a.kind != PartArg::Kind::Adjoint) throw std::logic_error("reduction " + label + ": target " + t + " is no d_slot");
+    if (a.kind != PartArg::Kind::Adjoint && a.kind != PartArg::Kind::Value)
+      throw std::logic_error("reduction " + label + ": target " + t + " is no slot or d_slot");
     a.write = true;
     a.type = "Real";
     p.args.push_back(a);

@@ -16,7 +16,8 @@
 // writes a call of the same function by name, so both run the same text.
 //
 // A reduction part has no function: it sums scratch buffers over their domain in a fixed
-// order and adds the totals to cotangents of scalar slots (parameter gradients).
+// order and adds the totals to cotangents of scalar slots (parameter gradients) or, in a
+// forward, stores them in scalar output slots.
 //
 // Ops whose forward is an implicit solve name a solver schedule instead of parts
 // ("newmark_pcg", "band_laplacian"); the engine owns those schedules (runtime/solvers.h,
@@ -106,7 +107,8 @@ const OpSpec& op_spec(const std::string& name);  // throws std::logic_error nami
 
 // A part over `extent` calling `f` (SSC_PART(name)) with the arguments named in `args`.
 PartSpec part(const std::string& label, Extent extent, PartFunction f, const std::vector<std::string>& args);
-// A fixed-order sum of the scratch buffers `sources` into the cotangents `targets` (d_slot).
+// A fixed-order sum of the scratch buffers `sources` added to the cotangents `targets` (d_slot)
+// or stored in the scalar outputs `targets` (slot).
 PartSpec reduction(const std::string& label, const std::vector<std::string>& sources,
                    const std::vector<std::string>& targets);
 // The same part, run only when `slot` is bound.

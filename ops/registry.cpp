@@ -9,6 +9,7 @@
 #include "ops/elasticity.h"
 #include "ops/extension.h"
 #include "ops/friction.h"
+#include "ops/line_search.h"
 #include "ops/newmark.h"
 #include "ops/neo_hookean.h"
 #include "ops/nodal.h"
@@ -27,6 +28,8 @@ const std::vector<OpSpec>& op_registry() {
       ops::contact_force_spec(),
       ops::step_iterate_spec(),
       ops::contact_implicit_spec(),
+      ops::line_search_spec(),
+      ops::line_search_step_spec(),
       ops::friction_spec(),
       ops::air_drag_spec(),
       ops::neo_hookean_system_spec(),

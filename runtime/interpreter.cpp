@@ -104,12 +104,13 @@ void Interpreter<Real>::run_reduction(int o, const PartSpec& p, int b) {
   }
   size_t next = 0;
   for (const PartArg& a : p.args) {
-    if (a.kind != PartArg::Kind::Adjoint) continue;
+    if (a.kind == PartArg::Kind::Scratch) continue;
     Real* target = static_cast<Real*>(bind(o, a, b));
-    const int t = graph_.ops()[o].input(a.name);
+    const bool store = a.kind == PartArg::Kind::Value;  // a forward's output, else a cotangent
+    const int t = store ? graph_.ops()[o].output(a.name) : graph_.ops()[o].input(a.name);
     for (int k = 0; k < graph_.tensor(t).components; ++k) {
       if (next >= totals.size()) throw std::logic_error("reduction " + p.label + ": more targets than sums");
-      target[k] += Real(totals[next++]);
+      target[k] = store ? Real(totals[next++]) : target[k] + Real(totals[next++]);
     }
   }
   if (next != totals.size()) throw std::logic_error("reduction " + p.label + ": more sums than targets");

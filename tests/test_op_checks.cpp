@@ -142,6 +142,24 @@ std::vector<std::vector<double>> dual_forward(const Graph& g, const StaticArrays
   const ops::PartContext<D> cx{D(grid.h), sizes.cell, sizes.node, sizes.point, sizes.band, g.plane_count()};
   for (const PartSpec& p : op.spec->forward) {
     if (!p.requires_slot.empty() && !op.bound(p.requires_slot)) continue;
+    if (p.function.name.empty()) {  // a forward reduction: its scratch sources' sums, in turn
+      std::vector<D> totals;
+      for (const PartArg& a : p.args)
+        if (a.kind == PartArg::Kind::Scratch) {
+          const std::vector<D>& v = scratch.at(a.name);
+          const int c = scratch_components(g, op, op.spec->scratch_spec(a.name));
+          for (int k = 0; k < c; ++k) {
+            D sum(0.0);
+            for (size_t e = k; e < v.size(); e += c) sum = sum + v[e];
+            totals.push_back(sum);
+          }
+        }
+      size_t next = 0;
+      for (const PartArg& a : p.args)
+        if (a.kind == PartArg::Kind::Value)
+          for (D& t : values.at(a.name)) t = totals.at(next++);
+      continue;
+    }
     std::vector<void*> args;
     for (const PartArg& a : p.args) {
       switch (a.kind) {

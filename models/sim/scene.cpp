@@ -303,6 +303,7 @@ Scene parse_scene(const nlohmann::json& config, const std::string& file) {
     s.solver.nonlinear_iterations = v.integer("nonlinear_iterations", s.solver.nonlinear_iterations);
     v.require(s.solver.nonlinear_iterations >= 1 && s.solver.nonlinear_iterations <= 50, "nonlinear_iterations",
               "must be between 1 and 50");
+    s.solver.line_search = v.boolean("line_search", s.solver.line_search);
     v.reject_unknown_keys();
   }
   if (r.has("extensions")) read_extensions(r.child("extensions"), s);

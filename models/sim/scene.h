@@ -84,6 +84,7 @@ struct SolverSpec {
   bool implicit_contact = false;
   bool updated_corotation = false;
   int nonlinear_iterations = 4;
+  bool line_search = true;  // on the implicit contact's iterations (ops/line_search.h)
 };
 
 struct Scene {

@@ -2,6 +2,7 @@
 #include "models/sim/timestep_graph.h"
 
 #include "models/sim/scene.h"
+#include "ops/line_search.h"
 
 namespace ssc {
 
@@ -15,6 +16,7 @@ TimestepModel timestep_model(const Scene& scene) {
   m.neo_hookean = scene.material.neo_hookean;
   m.updated_corotation = scene.solver.updated_corotation;
   m.nonlinear_iterations = scene.solver.nonlinear_iterations;
+  m.line_search = scene.solver.line_search;
   return m;
 }
 
@@ -195,7 +197,22 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
     solve_inputs.insert(solve_inputs.end(), newmark_scalars.begin(), newmark_scalars.end());
     const std::string u_name = last ? "u" : "u_it" + std::to_string(k + 1);
     const std::string cg_name = last ? "cg_iterations" : "cg_iterations_it" + std::to_string(k + 1);
-    g.add_op("newmark_solve", solve_inputs, {{"u", u_name, D::Node, 3}, {"cg_iterations", cg_name, D::Scalar, 1}});
+    const bool line_search = implicit_contact && model.line_search;
+    const std::string solved = line_search ? name("u_full") : u_name;
+    g.add_op("newmark_solve", solve_inputs, {{"u", solved, D::Node, 3}, {"cg_iterations", cg_name, D::Scalar, 1}});
+    if (line_search) {  // the solve's step scaled back where the contact would overshoot (ops/line_search.h)
+      const int full = g.find_tensor(solved);
+      g.add_op("line_search",
+               {G("guess", guess), G("u_full", full), G("rotation", rotation), G("lambda", lambda), G("mu", mu),
+                G("mass", t.mass), G("fixed", t.fixed), G("damping", step_damping),
+                P("ground_planes", t.ground_planes), P("dt", t.dt), P("theta", t.theta),
+                P("mass_damping", t.mass_damping), P("stiffness_damping", t.stiffness_damping)},
+               {{"sums", name("line_search_sums"), D::Scalar, ops::kLineSearchSums}});
+      g.add_op("line_search_step",
+               {P("sums", g.find_tensor(name("line_search_sums"))), P("dt", t.dt), P("guess", guess),
+                P("u_full", full)},
+               {{"u", u_name, D::Node, 3}});
+    }
     iterate = g.find_tensor(u_name);
   }
   t.u = g.find_tensor("u");

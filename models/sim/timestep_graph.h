@@ -29,6 +29,7 @@ struct TimestepModel {
   // The step's nonlinear iterations (ops/contact_implicit.h): implicit contact (Newton on the
   // penalty force), the rotation updated within the step, and how many solves a step takes.
   bool implicit_contact = false, updated_corotation = false;
+  bool line_search = true;  // on the implicit contact's iterations (ops/line_search.h)
   bool neo_hookean = false;  // material.model "neo_hookean" (ops/neo_hookean.h), through the iterations
   int nonlinear_iterations = 4;
 
