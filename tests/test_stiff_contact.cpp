@@ -7,7 +7,9 @@
 //    soft-min's reach;
 //  - its coefficient of restitution converges as the ground stiffens;
 //  - the paper's linearized contact explodes (or is stopped by the energy audit) on the same
-//    drop at 1e8 Pa/m: the case the implicit contact is for.
+//    drop at 1e8 Pa/m, and on the issue's ramp: the cases the implicit contact is for;
+//  - the line search (ops/line_search.h) is what holds an edge at 1/240 s; where the default
+//    iterations do not converge the energy audit stops the run.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -159,6 +161,51 @@ TEST(StiffContact, ABoxFaceOnAGridPlaneRestsOnTheGround) {
               area, 1e3 * drop);
   EXPECT_NEAR(area, 0.24, 0.24 * 0.05);  // measured 0.2308: 3.8 % short (cells whose surface no crossing edge carries)
   EXPECT_LT(std::abs(drop), 5e-3);
+}
+
+// The case of issue 14: a 0.2 m cube (E 5e4 Pa, nu 0.35, 500 kg/m^3, the default damping)
+// dropped at 1.1 m/s, a corner first, onto a 20 degree ramp, dt 1/600 s, 300 steps. The
+// paper's linearized contact gains energy on 1e8 and 1e9 Pa/m (the audit stops it); the
+// implicit contact runs to the end with its total energy never above its start on 1e7..1e9.
+TEST(StiffContact, TheIssuesRampHoldsOnStiffGrounds) {
+  for (const double stiffness : {1e7, 1e8, 1e9})
+    for (const std::string contact : {"linearized", "implicit"}) {
+      json j;
+      j["object"] = {{"primitive", "box"}, {"half_extents", {kHalf, kHalf, kHalf}}, {"position", {0, 0.25, 0}}};
+      j["grid"] = {{"cell_size", 0.05}};
+      j["material"] = {{"youngs_modulus", 5e4}, {"poisson_ratio", 0.35}, {"density", 500}};
+      j["gravity"] = {0, -9.81, 0};
+      j["initial"] = {{"linear_velocity", {0, -1.1, 0}}};
+      j["ground"] = {{"height", 0.0}, {"angles_deg", {20, 0}}, {"stiffness", stiffness}, {"softmin_alpha", kAlpha}};
+      j["time"] = {{"dt", 1.0 / 600}, {"steps", 300}, {"theta", 0.6}};
+      j["solver"] = {{"contact", contact}};
+      const Scene scene = parse_scene(j, "ramp.json");
+      const SimGrid grid = build_body_grid(scene);
+      Simulation sim(scene, grid);
+      const double start = total_energy(sim);
+      double highest = start;
+      int steps = 0;
+      try {
+        for (; steps < scene.time.steps; ++steps) {
+          sim.step();
+          highest = std::max(highest, total_energy(sim));
+        }
+      } catch (const SimulationError& e) {
+        std::printf("ramp, k %.0e Pa/m, %s: stopped at step %d: %.60s...\n", stiffness, contact.c_str(), steps, e.what());
+      }
+      if (contact == "linearized") {
+        if (stiffness >= 1e8)
+          EXPECT_LT(steps, scene.time.steps) << "k " << stiffness << ": the linearized contact ran to the end";
+        else
+          std::printf("ramp, k %.0e Pa/m, linearized: %d steps, energy never above %.4f J (start %.4f J)\n", stiffness,
+                      steps, highest, start);
+        continue;
+      }
+      std::printf("ramp, k %.0e Pa/m, implicit: energy %.4f J at the start, %.4f J at the end, never above %.4f J\n",
+                  stiffness, start, total_energy(sim), highest);
+      EXPECT_EQ(steps, scene.time.steps) << "k " << stiffness;
+      EXPECT_LE(highest, start) << "k " << stiffness;
+    }
 }
 
 // A run stopped by the energy audit with an error naming solver.nonlinear_iterations.
