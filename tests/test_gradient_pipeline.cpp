@@ -41,6 +41,8 @@
 #include "models/sim/gradient.h"
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
+#include "ops/line_search.h"
+#include "runtime/interpreter.h"
 #include "tests/synthetic_frame_cost.h"
 
 namespace ssc {
@@ -172,6 +174,21 @@ const Pipeline& iterating_pipeline() {
     j["ground"]["stiffness"] = 3e6;
     j["solver"]["contact"] = "implicit";
     j["solver"]["corotation"] = "updated";
+    j["solver"]["nonlinear_iterations"] = 3;
+    return build_pipeline(j, Vec3(0.05, 0.3, -0.03), Vec3(1.3, 1.0, 1.5), Vec3(-1.7, 0.7, -0.6));
+  }();
+  return *p;
+}
+
+// A ground sharp enough (1e7 Pa/m, soft-min alpha 3e3 1/m) that the implicit contact's line
+// search scales steps back (ops/line_search.h; the test checks that it does): its step
+// length is a constant of the adjoint, exact wherever no probe moves it across a choice.
+const Pipeline& line_search_pipeline() {
+  static const std::unique_ptr<Pipeline> p = [] {
+    json j = pipeline_scene_json();
+    j["ground"]["stiffness"] = 1e7;
+    j["ground"]["softmin_alpha"] = 3e3;
+    j["solver"]["contact"] = "implicit";
     j["solver"]["nonlinear_iterations"] = 3;
     return build_pipeline(j, Vec3(0.05, 0.3, -0.03), Vec3(1.3, 1.0, 1.5), Vec3(-1.7, 0.7, -0.6));
   }();
@@ -434,6 +451,26 @@ TEST(GradientPipeline, HeterogeneousStiffnessAndAirDragAdjointMatchesCentralDiff
 
 TEST(GradientPipeline, ImplicitContactAndUpdatedRotationAdjointMatchesCentralDifferences) {
   check_against_finite_differences(iterating_pipeline(), "sphere, implicit contact, updated rotation", 0.1);
+}
+
+TEST(GradientPipeline, LineSearchedContactAdjointMatchesCentralDifferences) {
+  const Pipeline& pl = line_search_pipeline();
+  Simulation sim(pl.scene, pl.grid, 1, true);
+  sim.set_parameters(0, pl.params);
+  const Graph& g = sim.timestep_graph().graph;
+  int scaled = 0, iterations = 0;
+  for (int n = 0; n < kSteps; ++n) {
+    sim.step();
+    for (int k = 0; k < pl.scene.solver.nonlinear_iterations; ++k) {
+      const std::string name = k == 0 ? "line_search_sums" : "line_search_sums_it" + std::to_string(k);
+      const std::vector<double>& sums = sim.interpreter().store().all(g.find_tensor(name));
+      scaled += ops::line_search_alpha(sums.data(), pl.scene.time.dt) < 1;
+      ++iterations;
+    }
+  }
+  std::printf("line search: %d of %d iterations scaled back\n", scaled, iterations);
+  ASSERT_GT(scaled, 0) << "the line search never acted: the test could not fail for it";
+  check_against_finite_differences(pl, "sphere, line-searched contact", 0.1);
 }
 
 TEST(GradientPipeline, NeoHookeanAdjointMatchesCentralDifferences) {
