@@ -112,7 +112,7 @@ SSC_HD inline void adj_stiffness_apply_cell(int i, const PartContext<Real>& cx, 
 }
 
 // The theta-scheme's elastic force with each end of the step at its own rotation
-// (solver.corotation = "updated"): theta f(u) + (1 - theta) f(u-), f(x; R) = f_off(R) - K(R) x.
+// (solver.corotation = "updated"): theta f(u) + (1 - theta) f(u-), f(u; R) = f_off(R) - K(R) u.
 // The end's -theta K_k u is the system's (A u), and the right-hand side's b_k K_k u- holds
 // -(1 - theta) dt K_k u-, which the (1 - theta) K_k u- here cancels; what is left of the start
 // is its own force f_off(R_n) - K_n u-. A rigid rotation then strains neither end.

@@ -109,7 +109,8 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
 
   // The step's solve, repeated (ops/contact_implicit.h): iteration k evaluates the implicit
   // contact at the iterate u_k (the first: the prediction u- + dt v-) and (solver.corotation =
-  // "updated") the rotation at its theta-point, and starts its CG iterations from u_k.
+  // "updated") the rotation at u_k (at its theta-point for the Neo-Hookean material), starts
+  // its CG iterations from u_k, and (implicit contact) line-searches the solve's step.
   const std::vector<OpArg> newmark_scalars = {P("dt", t.dt), P("theta", t.theta), P("mass_damping", t.mass_damping),
                                               P("stiffness_damping", t.stiffness_damping)};
   t.neo_hookean = model.neo_hookean;
