@@ -104,9 +104,7 @@ SSC_HD inline void line_search_point(int i, const PartContext<Real>& cx, const i
   out[0] = (Real(1) - t) * dot(da, sym3_apply(K, 0, da)) + t * dot(db, sym3_apply(K, 0, db));
   Real alpha = Real(1);
   for (int j = 0; j < kLineSearchSteps; ++j, alpha *= Real(kLineSearchShrink)) {
-    Vec3<Real> fa = zero3<Real>();
-    Real unused_K[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
-    for (int p = 0; p < plane_count; ++p) plane_contact_stiffness(planes[p], point_area[i], x + alpha * d, fa, unused_K);
+    const Vec3<Real> fa = contact_force(x + alpha * d, zero3<Real>(), point_area[i], planes, plane_count, Real(0), Real(0));
     out[1 + j] = dot(d, f - fa);
   }
 }
