@@ -193,10 +193,20 @@ __device__ __forceinline__ void pcg_check(double* cg, double tol, int max_it) {
   }
 }
 
+// The residual reference of a solve (runtime/pcg.h): mode 0 none (a relative residual),
+// 1 the solve's own |b| (the first adjoint solve of a step), 2 the larger of |b| and the
+// reference the step's earlier solves left in *reference; modes 1 and 2 store it there.
+// Returns the norm the residual is measured against (0 when b is).
+__device__ __forceinline__ double residual_scale(double b_norm, const double* reference, int mode) {
+  if (b_norm == 0.0 || mode == 0) return b_norm;
+  return mode == 1 ? b_norm : fmax(b_norm, __ldcg(reference));
+}
+
 // |b|, r = b - q (q = A x), z = M^-1 r, p = z, r.z, |r|, the test; x = 0 when b = 0.
 template <class R>
 __device__ __forceinline__ void pcg_start(int i, int len, double tol, int max_it, const R* b, const R* q,
-                                          const R* inv_diag, R* x, R* r, R* z, R* p, double* cg) {
+                                          const R* inv_diag, R* x, R* r, R* z, R* p, double* cg, double* reference,
+                                          int reference_mode) {
   double acc[3] = {0, 0, 0};
   for (int k = i; k < len; k += SSC_ITEM) {
     const R bk = b[k];
@@ -215,8 +225,10 @@ __device__ __forceinline__ void pcg_start(int i, int len, double tol, int max_it
   if (b_norm == 0.0)
     for (int k = i; k < len; k += SSC_ITEM) x[k] = R(0);
   if (i == 0) {
+    const double scale = residual_scale(b_norm, reference, reference_mode);
+    if (reference_mode != 0 && scale != 0.0) *reference = scale;
     for (int k = 0; k < 16; ++k) cg[k] = 0;
-    cg[0] = b_norm;
+    cg[0] = scale;
     cg[1] = acc[1];
     cg[2] = sqrt(acc[2]);
     pcg_check(cg, tol, max_it);
@@ -288,6 +300,8 @@ struct GridPcg {
   double tol;
   int max_it, log_slot;
   double *cg, *cg_log;
+  double* reference;  // the step's residual reference (residual_scale)
+  int reference_mode;
   unsigned long long* bar;
   // Consecutive sums alternate between two partial-sum buffers: a block may write the
   // next sum's partials while another still reads this one's.
@@ -299,10 +313,11 @@ struct GridPcg {
   // partial holds 2 * half doubles; barrier is the kernel's barrier counter.
   __device__ __forceinline__ GridPcg(R* x_, const R* b_, const R* inv_diag_, R* r_, R* w_, R* s_, R* z_, R* p_,
                                      R* iterations_, double tol_, int max_it_, int log_slot_, double* cg_,
-                                     double* cg_log_, double* partial, int half, double* barrier)
+                                     double* cg_log_, double* reference_, int reference_mode_, double* partial,
+                                     int half, double* barrier)
       : x(x_), b(b_), inv_diag(inv_diag_), r(r_), w(w_), s(s_), z(z_), p(p_), iterations(iterations_), tol(tol_),
-        max_it(max_it_), log_slot(log_slot_), cg(cg_), cg_log(cg_log_),
-        bar(reinterpret_cast<unsigned long long*>(barrier)), partial0(partial), partial1(partial + half),
+        max_it(max_it_), log_slot(log_slot_), cg(cg_), cg_log(cg_log_), reference(reference_),
+        reference_mode(reference_mode_), bar(reinterpret_cast<unsigned long long*>(barrier)), partial0(partial), partial1(partial + half),
         rank(grid_rank()), threads(grid_threads()) {}
 
   template <int N>
@@ -392,11 +407,13 @@ template <class R, class Iteration>
 __device__ __forceinline__ void grid_loop(GridPcg<R>& g, int count, const double (&start)[3], double bb,
                                           Iteration iteration) {
   const double b_norm = sqrt(bb) < (sizeof(R) == 4 ? 1e-20 : 1e-100) ? 0.0 : sqrt(bb);  // runtime/pcg.h
+  // Every block reads the reference before rank 0 may overwrite it with the same maximum.
+  const double scale = residual_scale(b_norm, g.reference, g.reference_mode);
   double gamma = start[0], alpha = start[0] / start[1], r_norm = sqrt(start[2]), rel = 0;
   int its = 0;
   bool active = false, converged = false;
   auto test = [&]() {
-    rel = r_norm / b_norm;
+    rel = r_norm / scale;
     active = false;
     converged = false;
     if (rel <= g.tol) converged = true;
@@ -424,7 +441,8 @@ __device__ __forceinline__ void grid_loop(GridPcg<R>& g, int count, const double
     test();
   }
   if (g.rank == 0) {
-    const double st[10] = {b_norm, gamma, r_norm, 0, alpha, double(g.beta), 0, double(its), rel,
+    if (g.reference_mode != 0 && scale != 0.0) *g.reference = scale;
+    const double st[10] = {scale, gamma, r_norm, 0, alpha, double(g.beta), 0, double(its), rel,
                            converged ? 1.0 : 0.0};
     for (int k = 0; k < 16; ++k) {
       g.cg[k] = k < 10 ? st[k] : 0.0;

@@ -15,6 +15,10 @@ namespace {
 
 using namespace snippet;
 
+// The residual reference of the step's adjoint time-step solves (gen::residual_scale):
+// one double per batch item.
+Builder& reference(Builder& b) { return b.scratch("reference", "solve_reference", "double", Domain::Scalar, 1, true); }
+
 // The Jacobi-PCG kernels shared by every solve (vectors of length len per batch item),
 // one block per item (gen::pcg_start, gen::pcg_iterate). Solver state s_cg: 16 doubles
 // per batch item. When an item has stopped (state 6 == 0), pcg_iterate and the gated
@@ -29,9 +33,11 @@ std::vector<Snippet> pcg_snippets(const Graph& g, int op) {
     Builder b = B("pcg_start", Extent::Item);
     b.vec("x", true, "len").vec("b", false, "len").vec("q", false, "len").vec("inv_diag", false, "len");
     b.vec("r", true, "len").vec("z", true, "len").vec("p", true, "len").value("len", "int");
-    b.value("tol", "double").value("max_it", "int");
+    b.value("tol", "double").value("max_it", "int").value("reference_mode", "int");
+    reference(b);
     state(b, true).stage("|b|, r = b - A x, z = M^-1 r, p = z, r.z, |r|, convergence test (block per item)", true);
-    s.push_back(b.code("gen::pcg_start<Real>(i, len, tol, max_it, v_b, v_q, v_inv_diag, v_x, v_r, v_z, v_p, $cg);\n"));
+    s.push_back(b.code("gen::pcg_start<Real>(i, len, tol, max_it, v_b, v_q, v_inv_diag, v_x, v_r, v_z, v_p, $cg,\n"
+                       "                     $reference, reference_mode);\n"));
   }
   {
     Builder b = B("pcg_iterate", Extent::Item);
@@ -63,8 +69,8 @@ Builder& grid_solve_params(Builder& b, const std::string& len, const std::string
   b.vec("x", true, len, true).vec("b", false, len).vec("inv_diag", false, len, true);
   b.vec("r", true, len, true).vec("w", true, len, true).vec("s", true, len, true);
   b.vec("z", true, len, true).vec("p", true, len).vec("iterations", true, "1");
-  b.value("tol", "double").value("max_it", "int").value("log_slot", "int");
-  b.scratch("cg", "cg", "double", Domain::Scalar, 16, true);
+  b.value("tol", "double").value("max_it", "int").value("log_slot", "int").value("reference_mode", "int");
+  reference(b).scratch("cg", "cg", "double", Domain::Scalar, 16, true);
   b.scratch("cg_log", "cg_log", "double", Domain::Scalar, 16 * kMaxSolveLog, true);
   b.scratch("partial", "grid_partial", "double", Domain::Scalar, 2 * 4 * kMaxGridBlocks, true);
   return b.scratch("bar", "grid_barrier_" + kernel, "double", Domain::Scalar, 1, true);
@@ -75,7 +81,7 @@ Builder& grid_solve_params(Builder& b, const std::string& len, const std::string
 std::string grid_state() {
   return fmt::format(
       "gen::GridPcg<Real> pcg(v_x, v_b, v_inv_diag, v_r, v_w, v_s, v_z, v_p, v_iterations, tol, max_it, log_slot,\n"
-      "                       $cg, $cg_log, $partial, {}, $bar);\n",
+      "                       $cg, $cg_log, $reference, reference_mode, $partial, {}, $bar);\n",
       4 * kMaxGridBlocks);
 }
 

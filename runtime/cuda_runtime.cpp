@@ -478,10 +478,10 @@ std::vector<double> GpuTimestep::Impl::solver_state() const {
 // pcg_iterate. The host reads the solver state every check_every iterations; the
 // iterations in between form one graph segment (`tag`). Returns the iterations per item.
 std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, int max_it, const Apply& apply,
-                                        const char* what, const std::string& tag) {
+                                        const char* what, const std::string& tag, int reference_mode) {
   Call c;
   c.len = len;
-  c.values = {{"tol", tol}, {"max_it", double(max_it)}};
+  c.values = {{"tol", tol}, {"max_it", double(max_it)}, {"reference_mode", double(reference_mode)}};
   const cu::DevicePtr r = scratch.at("v_r").ptr, z = scratch.at("v_z").ptr, p = scratch.at("v_p").ptr,
                       q = scratch.at("v_q").ptr, b = scratch.at("v_b").ptr, inv = scratch.at("v_inv_diag").ptr;
   c.vectors = {{"v_x", x}, {"v_b", b}, {"v_r", r}, {"v_z", z}, {"v_p", p}, {"v_q", q}, {"v_inv_diag", inv}};
@@ -537,18 +537,22 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
 // v_inv_diag), no host check: its outcome is read after the step (read_solve_checks).
 // `iterations` receives the iteration count per batch item on the device.
 void GpuTimestep::Impl::grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it,
-                                 cu::DevicePtr iterations, const char* what, std::vector<int>* iterations_out) {
+                                 cu::DevicePtr iterations, const char* what, std::vector<int>* iterations_out,
+                                 int reference_mode) {
   const int slot = int(solve_checks.size());
   if (slot >= kMaxSolveLog) throw std::logic_error("gpu: more grid solves in one step than s_cg_log holds");
   Call c;
   c.blocks = grid_blocks(k, work);
-  c.values = {{"tol", tol}, {"max_it", double(max_it)}, {"log_slot", double(slot)}};
+  c.values = {{"tol", tol},
+              {"max_it", double(max_it)},
+              {"log_slot", double(slot)},
+              {"reference_mode", double(reference_mode)}};
   for (const char* v : {"v_b", "v_inv_diag", "v_r", "v_w", "v_s", "v_z", "v_p", "v_r2", "v_w2", "v_s2"})
     c.vectors[v] = scratch.at(v).ptr;
   c.vectors["v_x"] = x;
   c.vectors["v_iterations"] = iterations;
   launch(k, c);
-  solve_checks.push_back({slot, what, tol, iterations_out});
+  solve_checks.push_back({slot, what, tol, iterations_out, reference_mode != 0});
 }
 
 // After a step: iterations and convergence of its grid solves, from s_cg_log.
@@ -560,10 +564,10 @@ void GpuTimestep::Impl::read_solve_checks() {
   const std::vector<SolveCheck> checks = std::move(solve_checks);
   solve_checks.clear();
   for (const SolveCheck& c : checks) {
-    if (c.iterations) c.iterations->assign(batch, 0);
+    if (c.iterations && !c.add) c.iterations->assign(batch, 0);
     for (int k = 0; k < batch; ++k) {
       const double* st = log.data() + size_t(k) * per_item + 16 * size_t(c.slot);
-      if (c.iterations) (*c.iterations)[k] = int(st[7]);
+      if (c.iterations) (*c.iterations)[k] += int(st[7]);
       if (st[9] == 0.0)
         throw SimulationError(fmt::format("the {} did not converge on the GPU (batch item {}): relative residual "
                                           "{:.3g} after {} CG iterations (tolerance {:.3g})",

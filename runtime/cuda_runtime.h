@@ -124,7 +124,8 @@ class GpuTimestep : public StepBackend {
   void run_kernels(bool adjoint, int first, int last);
 
   const std::vector<int>& cg_iterations() const override;
-  const std::vector<int>& adjoint_cg_iterations() const;  // of the last run_adjoint()'s time-step solve
+  // The last run_adjoint()'s time-step solves' iterations, summed.
+  const std::vector<int>& adjoint_cg_iterations() const;
   std::vector<GpuKernelTiming> timings() const;  // per kernel, with options.profile
   double compile_seconds() const;
   int kernel_count() const;

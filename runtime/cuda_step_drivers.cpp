@@ -67,11 +67,12 @@ void GpuTimestep::Impl::newmark(int o) {
   newmark_setup(o, rhs, u, false);
   if (grid_solves) {
     grid_pcg(kernel("newmark_pcg_grid", false, o), u, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
-             solver.cg_max_iterations, tensors.at(op.output("cg_iterations")).ptr, "time-step solve", &cg_iterations);
+             solver.cg_max_iterations, tensors.at(op.output("cg_iterations")).ptr, "time-step solve", &cg_iterations,
+             0);
     return;
   }
   cg_iterations = pcg(u, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(o),
-                      "time-step solve", fmt::format("newmark {}", o));
+                      "time-step solve", fmt::format("newmark {}", o), 0);
   write_iterations(op.output("cg_iterations"), cg_iterations);
 }
 
@@ -83,10 +84,10 @@ void GpuTimestep::Impl::extension(int o) {
   launch(kernel("extension_setup"), setup);
   if (grid_solves)
     grid_pcg(kernel(extension_grid), x, sizes.band, solver.extension_tolerance, solver.extension_max_iterations,
-             scratch.at("v_iterations_sink").ptr, "displacement extension", nullptr);
+             scratch.at("v_iterations_sink").ptr, "displacement extension", nullptr, 0);
   else
     pcg(x, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, extension_apply(),
-        "displacement extension", fmt::format("extension {}", o));
+        "displacement extension", fmt::format("extension {}", o), 0);
 }
 
 void GpuTimestep::Impl::launch_plan(const PlannedKernel* begin, const PlannedKernel* end,
@@ -130,14 +131,19 @@ void GpuTimestep::Impl::adjoint_newmark(int o) {
   const OpNode& op = graph.ops()[o];
   const cu::DevicePtr w = scratch.at(scratch_of("w", o)).ptr;
   newmark_setup(o, adjoints.at(op.output("u")).ptr, w, true);
+  // The residual's reference: the largest cotangent of the step's adjoint time-step solves
+  // (runtime/solvers.cpp, newmark_adjoint).
+  const int reference_mode = adjoint_reference_set ? 2 : 1;
+  adjoint_reference_set = true;
   if (grid_solves) {
     grid_pcg(kernel("newmark_pcg_grid", false, o), w, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
              solver.cg_max_iterations, scratch.at("v_iterations_sink").ptr, "adjoint time-step solve",
-             &adjoint_cg_iterations);
+             &adjoint_cg_iterations, reference_mode);
     return;
   }
-  adjoint_cg_iterations = pcg(w, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(o),
-                              "adjoint time-step solve", fmt::format("adjoint newmark {}", o));
+  const std::vector<int> its = pcg(w, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(o),
+                                   "adjoint time-step solve", fmt::format("adjoint newmark {}", o), reference_mode);
+  for (int k = 0; k < batch; ++k) adjoint_cg_iterations[k] += its[k];
 }
 
 void GpuTimestep::Impl::adjoint_extension(int o) {
@@ -148,10 +154,10 @@ void GpuTimestep::Impl::adjoint_extension(int o) {
   launch(kernel("extension_adj_setup", true), setup);
   if (grid_solves)
     grid_pcg(kernel(extension_grid), y, sizes.band, solver.extension_tolerance, solver.extension_max_iterations,
-             scratch.at("v_iterations_sink").ptr, "adjoint displacement extension", nullptr);
+             scratch.at("v_iterations_sink").ptr, "adjoint displacement extension", nullptr, 0);
   else
     pcg(y, 3L * sizes.band, solver.extension_tolerance, solver.extension_max_iterations, extension_apply(),
-        "adjoint displacement extension", fmt::format("adjoint extension {}", o));
+        "adjoint displacement extension", fmt::format("adjoint extension {}", o), 0);
 }
 
 void GpuTimestep::Impl::solve_adjoint(int o) {
@@ -165,6 +171,8 @@ void GpuTimestep::Impl::run_adjoint() {
   // The first segment holds the extension setup, whose zero_x argument differs between
   // the first step of a backward pass and the others: one captured graph each.
   segment_prefix = "adjoint segment";
+  adjoint_reference_set = false;
+  adjoint_cg_iterations.assign(batch, 0);
   launch_plan(plan.adjoint.data(), plan.adjoint.data() + plan.adjoint.size(),
               fresh_backward ? "adjoint segment 0 (fresh)" : "adjoint segment 0", [this](int o) { solve_adjoint(o); },
               "adjoint step");

@@ -46,6 +46,7 @@ struct SolveCheck {
   std::string what;
   double tolerance = 0;
   std::vector<int>* iterations = nullptr;  // filled per batch item
+  bool add = false;                        // added to *iterations instead
 };
 
 }  // namespace gpu_detail
@@ -87,6 +88,7 @@ struct GpuTimestep::Impl {
   // The adjoint extension solve starts from the previous (later) step's solution, except
   // on the first step of a backward pass (as the interpreter does).
   bool fresh_backward = true;
+  bool adjoint_reference_set = false;  // an adjoint time-step solve of this step has run
   std::map<std::string, GpuKernelTiming> timing;
   double compile_s = 0;
   // Launch segments between host checks of the solver state. With graphs, each segment
@@ -139,12 +141,15 @@ struct GpuTimestep::Impl {
   // The kernel with this label (of op `op` where op >= 0: each solve binds its own tensors).
   const PlannedKernel& kernel(const std::string& label, bool adjoint = false, int op = -1) const;
   std::vector<double> solver_state() const;
+  // reference_mode: the residual's reference (gen::residual_scale), 0 for a relative one.
   std::vector<int> pcg(cu::DevicePtr x, long len, double tol, int max_it, const Apply& apply, const char* what,
-                       const std::string& tag);
+                       const std::string& tag, int reference_mode);
   void decide_grid_solves();
   unsigned grid_blocks(const PlannedKernel& k, long work) const;
+  // iterations_out: assigned the solve's iterations per item, or added to with reference_mode != 0
+  // (the step's adjoint time-step solves, summed).
   void grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it, cu::DevicePtr iterations,
-                const char* what, std::vector<int>* iterations_out);
+                const char* what, std::vector<int>* iterations_out, int reference_mode);
   void read_solve_checks();
   void write_iterations(int tensor, const std::vector<int>& iterations);
 

@@ -177,11 +177,15 @@ void Interpreter<Real>::clear_adjoints(bool including_inputs) {
 
 template <class Real>
 void Interpreter<Real>::run_adjoint() {
+  adjoint_solve_reference_.assign(batch(), 0.0);
+  report_.adjoint_cg_iterations.assign(batch(), 0);
   for (auto it = graph_.ops().rbegin(); it != graph_.ops().rend(); ++it) execute_adjoint(*it);
 }
 
 template <class Real>
 void Interpreter<Real>::run_op_adjoint(int op) {
+  adjoint_solve_reference_.assign(batch(), 0.0);
+  report_.adjoint_cg_iterations.assign(batch(), 0);
   execute_adjoint(graph_.ops().at(op));
 }
 

@@ -26,7 +26,8 @@ struct SolverOptions {
 
 // What the last run() reported, per batch item.
 struct RunReport {
-  std::vector<int> cg_iterations;
+  std::vector<int> cg_iterations;          // the last time-step solve's
+  std::vector<int> adjoint_cg_iterations;  // the last run_adjoint()'s time-step solves, summed
   std::vector<double> cg_residual;
   std::vector<int> extension_iterations;
 };
@@ -66,6 +67,9 @@ class Interpreter {
   const Real* static_real(const std::string& name) const { return static_real_.at(name).data(); }
   RunReport& mutable_report() { return report_; }
   std::vector<Real>& extension_adjoint_guess(int b) { return extension_adjoint_guess_[b]; }
+  // The largest right-hand side norm of the time-step adjoint solves so far in this
+  // run_adjoint() (0 at its start, and for run_op_adjoint): their residual reference.
+  double& adjoint_solve_reference(int b) { return adjoint_solve_reference_[b]; }
   // A Real scratch buffer of op `op` for batch item b (a solver leaves its result there for
   // the op's adjoint parts).
   Real* scratch_real(int op, const std::string& key, int b) {
@@ -99,6 +103,7 @@ class Interpreter {
   std::map<std::string, std::vector<int>> static_int_;
   std::vector<std::map<std::string, Scratch>> scratch_;  // per op, by key
   std::vector<std::vector<Real>> extension_adjoint_guess_;  // per batch item, warm start
+  std::vector<double> adjoint_solve_reference_;              // per batch item
 };
 
 extern template class Interpreter<double>;

@@ -2,11 +2,15 @@
 //
 // Dot products are summed in fixed blocks (parallel over blocks, blocks added in order,
 // in double), so the result does not depend on the number of threads. Stops when
-// ||r|| <= tolerance * ||b||; the caller decides what non-convergence means. A right-hand
+// ||r|| <= tolerance * max(||b||, reference): with reference 0 a relative residual; a
+// reference norm makes it an absolute one for right-hand sides smaller than it (the
+// adjoint solves of one step, runtime/solvers.cpp). The caller decides what
+// non-convergence means. A right-hand
 // side below negligible_rhs_norm gives x = 0: an adjoint cotangent that has decayed to
 // 1e-150 (through the contact's exp(-alpha d)) would otherwise underflow p.Ap to 0 and
 // break the iteration with 0/0, and it adds nothing a double (or float) gradient can hold.
 #pragma once
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -21,7 +25,8 @@ constexpr long kCellParallelThreshold = 256;
 
 struct PcgResult {
   int iterations = 0;
-  double relative_residual = 0;
+  double relative_residual = 0;  // ||r|| / max(||b||, reference)
+  double rhs_norm = 0;           // ||b||
   bool converged = false;
 };
 
@@ -56,10 +61,11 @@ constexpr double negligible_rhs_norm() {
 // apply(p, Ap) computes the (SPD) operator; inv_diag is the Jacobi preconditioner.
 template <class Real, class Apply>
 PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b, Real* x, double tolerance,
-                     int max_iterations) {
+                     int max_iterations, double reference = 0) {
   std::vector<Real> r(n), z(n), p(n), q(n);
   PcgResult result;
   const double b_norm = std::sqrt(deterministic_dot(b, b, n));
+  result.rhs_norm = b_norm;
   if (b_norm < negligible_rhs_norm<Real>()) {
     for (long i = 0; i < n; ++i) x[i] = Real(0);
     result.converged = true;
@@ -74,8 +80,9 @@ PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b,
   }
   double rz = deterministic_dot(r.data(), z.data(), n);
   double r_norm = std::sqrt(deterministic_dot(r.data(), r.data(), n));
+  const double scale = std::max(b_norm, reference);
   while (true) {
-    result.relative_residual = r_norm / b_norm;
+    result.relative_residual = r_norm / scale;
     if (result.relative_residual <= tolerance) {
       result.converged = true;
       return result;

@@ -70,8 +70,9 @@ struct NewmarkSystem {
     }
   }
 
-  // Solves A x = rhs (fixed entries of rhs ignored, x starts from its content).
-  PcgResult solve(const Real* rhs, Real* x, double tolerance, int max_iterations) const {
+  // Solves A x = rhs (fixed entries of rhs ignored, x starts from its content) to a
+  // residual of tolerance * max(|rhs|, reference) (runtime/pcg.h).
+  PcgResult solve(const Real* rhs, Real* x, double tolerance, int max_iterations, double reference = 0) const {
     const Real h = Real(g.h);
     const long n = 3L * g.node_count;
     std::vector<Real> corner(24 * size_t(g.cell_count)), inv_diag(n), b(n);
@@ -92,7 +93,7 @@ struct NewmarkSystem {
       }
     }
     auto op = [&](const Real* p, Real* q) { apply(p, q, corner); };
-    return jacobi_pcg<Real>(n, op, inv_diag.data(), b.data(), x, tolerance, max_iterations);
+    return jacobi_pcg<Real>(n, op, inv_diag.data(), b.data(), x, tolerance, max_iterations, reference);
   }
 };
 
@@ -130,6 +131,12 @@ void newmark_forward(Interpreter<Real>& in, const OpNode& op, int b) {
 
 // w = A^-1 u_bar (A symmetric) into the op's scratch buffer w; the op's adjoint parts
 // (ops/newmark.h) then add w to rhs_bar and hand the parameters -w^T (dA/dp) u.
+// The residual is relative to the largest u_bar of the step's adjoint solves so far
+// (Interpreter::adjoint_solve_reference): a step of several nonlinear iterations hands
+// the earlier iterations' solves cotangents many orders smaller than the last one's
+// (1e-8 to 1e-50 of it once the iterations have converged), and solving those to their
+// own relative tolerance would cost as much as the last solve for nothing the gradient
+// can hold. Every solve of the step so reaches the same absolute accuracy.
 template <class Real>
 void newmark_adjoint(Interpreter<Real>& in, const OpNode& op, int b) {
   const Slots<Real> a{in, op, b};
@@ -138,7 +145,10 @@ void newmark_adjoint(Interpreter<Real>& in, const OpNode& op, int b) {
   Real* w = in.scratch_real(o, "w", b);
   std::fill_n(w, 3 * size_t(in.grid().node_count), Real(0));
   const SolverOptions& opt = in.options();
-  const PcgResult r = system.solve(a.bar("u"), w, opt.cg_tolerance, opt.cg_max_iterations);
+  double& reference = in.adjoint_solve_reference(b);
+  const PcgResult r = system.solve(a.bar("u"), w, opt.cg_tolerance, opt.cg_max_iterations, reference);
+  reference = std::max(reference, r.rhs_norm);
+  in.mutable_report().adjoint_cg_iterations[b] += r.iterations;
   if (!r.converged)
     throw SimulationError(fmt::format("the adjoint time-step solve did not converge (batch item {}): relative "
                                       "residual {:.3g} after {} iterations",

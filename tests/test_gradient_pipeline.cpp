@@ -30,6 +30,7 @@
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -473,6 +474,62 @@ TEST(GradientPipeline, LineSearchedContactAdjointMatchesCentralDifferences) {
   check_against_finite_differences(pl, "sphere, line-searched contact", 0.1);
 }
 
+// The adjoint time-step solves of one step share a residual reference, the largest
+// cotangent among them (runtime/solvers.cpp): once a step's nonlinear iterations have
+// converged, the earlier iterations' solves get cotangents many orders smaller than the
+// last one's and stop at once. Against the same step's adjoint with every solve to its own
+// relative residual (the ops' adjoints one at a time, run_op_adjoint): the cotangents agree
+// to the solves' tolerance, and the CG iterations of the steps in flight (the first three,
+// whose iterations converge at once) fall to a third; in contact on this sharp ground the
+// iterations are still converging, and their solves have work to do.
+TEST(GradientPipeline, ConvergedIterationsAdjointSolvesStopAtOnce) {
+  const Pipeline& pl = line_search_pipeline();
+  Simulation sim(pl.scene, pl.grid, 1, true);
+  sim.set_parameters(0, pl.params);
+  const TimestepGraph& tg = sim.timestep_graph();
+  Interpreter<double>& in = sim.interpreter();
+  TensorStore<double>& adj = in.adjoint();
+  const int ops = int(tg.graph.ops().size());
+  double worst = 0;
+  for (int n = 0; n < kSteps; ++n) {
+    sim.step();
+    std::vector<std::vector<double>> result[2];
+    long iterations[2] = {0, 0};
+    for (int mode = 0; mode < 2; ++mode) {
+      in.clear_adjoints(true);
+      std::mt19937_64 rng(31 + n);
+      std::normal_distribution<double> normal(0.0, 1.0);
+      for (int t : {tg.u, tg.v, tg.band_u})
+        for (double& x : adj.all(t)) x = normal(rng);
+      if (mode == 0) {
+        in.run_adjoint();
+        iterations[0] = in.report().adjoint_cg_iterations[0];
+      } else {
+        for (int o = ops - 1; o >= 0; --o) {
+          in.run_op_adjoint(o);
+          iterations[1] += in.report().adjoint_cg_iterations[0];
+        }
+      }
+      for (size_t t = 0; t < tg.graph.tensors().size(); ++t)
+        if (tg.graph.tensor(int(t)).role != TensorInfo::Role::Intermediate) result[mode].push_back(adj.all(int(t)));
+    }
+    for (size_t k = 0; k < result[0].size(); ++k) {
+      double diff = 0, size = 0;
+      for (size_t i = 0; i < result[0][k].size(); ++i) {
+        diff = std::max(diff, std::abs(result[0][k][i] - result[1][k][i]));
+        size = std::max(size, std::abs(result[1][k][i]));
+      }
+      if (size > 0) worst = std::max(worst, diff / size);
+    }
+    std::printf("step %2d: adjoint CG iterations %3ld with the shared reference, %3ld with each solve relative\n",
+                n + 1, iterations[0], iterations[1]);
+    EXPECT_LE(iterations[0], iterations[1]) << "step " << n + 1;
+    if (n < 3) EXPECT_LT(2 * iterations[0], iterations[1]) << "step " << n + 1 << " (in flight)";
+  }
+  std::printf("largest relative difference of a cotangent: %.2e\n", worst);
+  EXPECT_LT(worst, 1e-9);
+}
+
 TEST(GradientPipeline, NeoHookeanAdjointMatchesCentralDifferences) {
   check_against_finite_differences(neo_hookean_pipeline(), "Neo-Hookean sphere, implicit contact", 0.1);
 }
@@ -495,6 +552,7 @@ TEST(GradientPipeline, CheckpointingGivesTheSameGradient) {
   GradientOptions every, third, whole;
   every.checkpoint_every = 1;
   third.checkpoint_every = 3;
+  whole.memory_budget_bytes = 1e9;
   ASSERT_LE(double(pl.frames.back().step) * double(sim.step_bytes()), whole.memory_budget_bytes);  // steps kept whole
   const std::vector<double> a = flatten(evaluate_cost_gradient(sim, *pl.cost, pl.frames, every)[0]);
   const std::vector<double> b = flatten(evaluate_cost_gradient(sim, *pl.cost, pl.frames, third)[0]);

@@ -17,11 +17,15 @@ struct FrameSeed {
 };
 
 // 0: every step kept whole (no recomputation); k > 0: the state of every k-th step.
-// The budget is at most half the memory free now where the steps run.
+// The budget is at most half the memory free now where the steps run (gradient.h).
 int choose_checkpoint_interval(Simulation& sim, int steps, const GradientOptions& o) {
   if (o.checkpoint_every > 0) return o.checkpoint_every;
-  double budget = o.memory_budget_bytes;
-  budget = std::min(budget, 0.5 * double(sim.backend().free_device_memory()));
+  constexpr double kHostBudget = 2e9;
+  double budget = 0.5 * double(sim.backend().free_device_memory());
+  if (o.memory_budget_bytes > 0)
+    budget = std::min(budget, o.memory_budget_bytes);
+  else if (!sim.on_gpu())
+    budget = std::min(budget, kHostBudget);
   if (double(steps) * double(sim.step_bytes()) <= budget) return 0;
   const SimGrid& g = sim.grid();
   const double bytes = double(steps + 1) * sim.batch() * 8.0 * (6.0 * g.node_count + 3.0 * g.band_count);

@@ -50,11 +50,12 @@ struct CostGradient {
 struct GradientOptions {
   bool gradient = true;
   // 0: every step kept whole (states and intermediates: nothing recomputed) if that fits in
-  // memory_budget_bytes, else every step's state if that fits, else every ceil(sqrt(T))-th
-  // state; k > 0: every k-th state. The memory is the device's on the GPU (the budget then at
-  // most half of its free memory), else the host's.
+  // the memory budget, else every step's state if that fits, else every ceil(sqrt(T))-th
+  // state; k > 0: every k-th state. The memory is the device's on the GPU, else the host's;
+  // the budget is at most half of what is free there now, and memory_budget_bytes if > 0
+  // (default: 2 GB of host memory on the CPU; on the GPU no more than the half).
   int checkpoint_every = 0;
-  double memory_budget_bytes = 2e9;
+  double memory_budget_bytes = 0;
 };
 
 // One result per batch item. The simulation must have been built with extension = true.
