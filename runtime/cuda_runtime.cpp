@@ -692,7 +692,10 @@ void GpuTimestep::clear_adjoints(bool including_inputs) {
   Impl& m = *impl_;
   cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
   m.ensure_adjoint();
-  if (including_inputs) m.fresh_backward = true;
+  if (including_inputs) {
+    m.fresh_backward = true;
+    m.clear_warm_starts();
+  }
   const size_t skip = including_inputs ? 0 : m.adjoint_input_bytes;
   if (m.adjoint_arena.bytes > skip)
     cu::check(m.d->MemsetD8(m.adjoint_arena.ptr + skip, 0, m.adjoint_arena.bytes - skip), "clear cotangents");
@@ -712,6 +715,7 @@ void GpuTimestep::restore_adjoints() {
   cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
   cu::check(m.d->MemcpyDtoD(m.adjoint_arena.ptr, m.saved_adjoints.ptr, m.adjoint_arena.bytes), "restore cotangents");
   m.fresh_backward = true;
+  m.clear_warm_starts();
 }
 
 void GpuTimestep::set_adjoint(int tensor, const std::vector<double>& all_items) {
@@ -769,6 +773,8 @@ void GpuTimestep::run_kernels(bool adjoint, int first, int last) {
   if (first < 0 || last >= int(plan.size()) || first > last) throw std::out_of_range("gpu: run_kernels range");
   const std::string tag = fmt::format("{} kernels {}-{}", adjoint ? "adjoint" : "forward", first, last);
   m.segment_prefix = tag;
+  m.adjoint_reference_set = false;  // each adjoint solve to its own residual, from zero (as run_op_adjoint)
+  m.warm_adjoint_solves = false;
   m.launch_plan(plan.data() + first, plan.data() + last + 1, tag + " segment 0", [&m, adjoint](int o) {
     if (adjoint)
       m.solve_adjoint(o);

@@ -10,7 +10,9 @@
 // Adjoint (implicit-function adjoints, as runtime/interpreter_adjoint.cpp): the
 // extension's cotangent solve L y = band_u_bar into scratch y (warm-started from the
 // previous, later step's y within one backward pass), the time-step system's
-// A w = u_bar into scratch w from zero; the fused adj_ kernels around them read y and w.
+// A w = u_bar into scratch w (the step's first such solve warm-started from its previous
+// solution, the others from zero; all to a residual against the step's largest u_bar:
+// runtime/solvers.cpp, newmark_adjoint); the fused adj_ kernels around them read y and w.
 #include <fmt/format.h>
 
 #include <cstdlib>
@@ -130,11 +132,12 @@ void GpuTimestep::Impl::run() {
 void GpuTimestep::Impl::adjoint_newmark(int o) {
   const OpNode& op = graph.ops()[o];
   const cu::DevicePtr w = scratch.at(scratch_of("w", o)).ptr;
-  newmark_setup(o, adjoints.at(op.output("u")).ptr, w, true);
-  // The residual's reference: the largest cotangent of the step's adjoint time-step solves
-  // (runtime/solvers.cpp, newmark_adjoint).
+  // The residual's reference, the largest cotangent of the step's adjoint time-step solves,
+  // and the first solve's warm start, its solution at the later step (runtime/solvers.cpp,
+  // newmark_adjoint; clear_warm_starts zeroes it for a new backward pass).
   const int reference_mode = adjoint_reference_set ? 2 : 1;
   adjoint_reference_set = true;
+  newmark_setup(o, adjoints.at(op.output("u")).ptr, w, !(reference_mode == 1 && warm_adjoint_solves));
   if (grid_solves) {
     grid_pcg(kernel("newmark_pcg_grid", false, o), w, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
              solver.cg_max_iterations, scratch.at("v_iterations_sink").ptr, "adjoint time-step solve",
@@ -144,6 +147,13 @@ void GpuTimestep::Impl::adjoint_newmark(int o) {
   const std::vector<int> its = pcg(w, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(o),
                                    "adjoint time-step solve", fmt::format("adjoint newmark {}", o), reference_mode);
   for (int k = 0; k < batch; ++k) adjoint_cg_iterations[k] += its[k];
+}
+
+void GpuTimestep::Impl::clear_warm_starts() {
+  for (size_t o = 0; o < graph.ops().size(); ++o)
+    if (graph.ops()[o].spec->solver == "newmark_pcg")
+      if (const auto w = scratch.find(scratch_of("w", int(o))); w != scratch.end())
+        cu::check(d->MemsetD8(w->second.ptr, 0, w->second.bytes), "clear warm starts");
 }
 
 void GpuTimestep::Impl::adjoint_extension(int o) {
@@ -172,10 +182,12 @@ void GpuTimestep::Impl::run_adjoint() {
   // the first step of a backward pass and the others: one captured graph each.
   segment_prefix = "adjoint segment";
   adjoint_reference_set = false;
+  warm_adjoint_solves = true;
   adjoint_cg_iterations.assign(batch, 0);
   launch_plan(plan.adjoint.data(), plan.adjoint.data() + plan.adjoint.size(),
               fresh_backward ? "adjoint segment 0 (fresh)" : "adjoint segment 0", [this](int o) { solve_adjoint(o); },
               "adjoint step");
+  warm_adjoint_solves = false;
   fresh_backward = false;
 }
 

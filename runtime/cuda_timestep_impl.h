@@ -89,6 +89,7 @@ struct GpuTimestep::Impl {
   // on the first step of a backward pass (as the interpreter does).
   bool fresh_backward = true;
   bool adjoint_reference_set = false;  // an adjoint time-step solve of this step has run
+  bool warm_adjoint_solves = false;    // in run_adjoint (not in run_kernels, as run_op_adjoint)
   std::map<std::string, GpuKernelTiming> timing;
   double compile_s = 0;
   // Launch segments between host checks of the solver state. With graphs, each segment
@@ -162,6 +163,7 @@ struct GpuTimestep::Impl {
   void solve_adjoint(int op);
   void newmark_setup(int op, cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x);
   void newmark(int op);
+  void clear_warm_starts();  // the adjoint time-step solves' warm starts, for a new backward pass
   void extension(int op);
   void run();
   void adjoint_newmark(int op);

@@ -52,6 +52,7 @@ Interpreter<Real>::Interpreter(const Graph& graph, const StaticArrays& grid, int
     }
   }
   extension_adjoint_guess_.assign(batch, {});
+  newmark_adjoint_guess_.assign(batch, {});
 }
 
 template <class Real>
@@ -169,7 +170,10 @@ void Interpreter<Real>::execute(const OpNode& op) {
 
 template <class Real>
 void Interpreter<Real>::clear_adjoints(bool including_inputs) {
-  if (including_inputs) extension_adjoint_guess_.assign(batch(), {});  // a new backward pass
+  if (including_inputs) {  // a new backward pass
+    extension_adjoint_guess_.assign(batch(), {});
+    newmark_adjoint_guess_.assign(batch(), {});
+  }
   for (size_t t = 0; t < graph_.tensors().size(); ++t)
     if (including_inputs || graph_.tensor(int(t)).role != TensorInfo::Role::Input)
       std::fill(adjoint_.all(int(t)).begin(), adjoint_.all(int(t)).end(), Real(0));
@@ -177,14 +181,16 @@ void Interpreter<Real>::clear_adjoints(bool including_inputs) {
 
 template <class Real>
 void Interpreter<Real>::run_adjoint() {
-  adjoint_solve_reference_.assign(batch(), 0.0);
+  adjoint_solves_.assign(batch(), {});
   report_.adjoint_cg_iterations.assign(batch(), 0);
+  warm_adjoint_solves_ = true;
   for (auto it = graph_.ops().rbegin(); it != graph_.ops().rend(); ++it) execute_adjoint(*it);
+  warm_adjoint_solves_ = false;
 }
 
 template <class Real>
 void Interpreter<Real>::run_op_adjoint(int op) {
-  adjoint_solve_reference_.assign(batch(), 0.0);
+  adjoint_solves_.assign(batch(), {});
   report_.adjoint_cg_iterations.assign(batch(), 0);
   execute_adjoint(graph_.ops().at(op));
 }

@@ -67,9 +67,17 @@ class Interpreter {
   const Real* static_real(const std::string& name) const { return static_real_.at(name).data(); }
   RunReport& mutable_report() { return report_; }
   std::vector<Real>& extension_adjoint_guess(int b) { return extension_adjoint_guess_[b]; }
-  // The largest right-hand side norm of the time-step adjoint solves so far in this
-  // run_adjoint() (0 at its start, and for run_op_adjoint): their residual reference.
-  double& adjoint_solve_reference(int b) { return adjoint_solve_reference_[b]; }
+  // The time-step adjoint solves of this run_adjoint() so far (none at its start and for
+  // run_op_adjoint): their count and the largest right-hand side norm, their residual
+  // reference (runtime/solvers.cpp, newmark_adjoint).
+  struct AdjointSolves {
+    int count = 0;
+    double reference = 0;
+  };
+  AdjointSolves& adjoint_solves(int b) { return adjoint_solves_[b]; }
+  // The first adjoint time-step solve's solution at the later step of this backward pass
+  // (empty at its start): that solve's warm start, in run_adjoint() only.
+  std::vector<Real>* newmark_adjoint_guess(int b) { return warm_adjoint_solves_ ? &newmark_adjoint_guess_[b] : nullptr; }
   // A Real scratch buffer of op `op` for batch item b (a solver leaves its result there for
   // the op's adjoint parts).
   Real* scratch_real(int op, const std::string& key, int b) {
@@ -103,7 +111,9 @@ class Interpreter {
   std::map<std::string, std::vector<int>> static_int_;
   std::vector<std::map<std::string, Scratch>> scratch_;  // per op, by key
   std::vector<std::vector<Real>> extension_adjoint_guess_;  // per batch item, warm start
-  std::vector<double> adjoint_solve_reference_;              // per batch item
+  std::vector<std::vector<Real>> newmark_adjoint_guess_;    // per batch item, warm start
+  std::vector<AdjointSolves> adjoint_solves_;               // per batch item
+  bool warm_adjoint_solves_ = false;
 };
 
 extern template class Interpreter<double>;

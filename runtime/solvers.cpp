@@ -131,23 +131,33 @@ void newmark_forward(Interpreter<Real>& in, const OpNode& op, int b) {
 
 // w = A^-1 u_bar (A symmetric) into the op's scratch buffer w; the op's adjoint parts
 // (ops/newmark.h) then add w to rhs_bar and hand the parameters -w^T (dA/dp) u.
-// The residual is relative to the largest u_bar of the step's adjoint solves so far
-// (Interpreter::adjoint_solve_reference): a step of several nonlinear iterations hands
-// the earlier iterations' solves cotangents many orders smaller than the last one's
-// (1e-8 to 1e-50 of it once the iterations have converged), and solving those to their
-// own relative tolerance would cost as much as the last solve for nothing the gradient
-// can hold. Every solve of the step so reaches the same absolute accuracy.
+// A step of several nonlinear iterations has several solves, run last iteration first:
+// - The residual is relative to the largest u_bar of the step's solves so far
+//   (Interpreter::adjoint_solves). Once the iterations have converged the earlier ones get
+//   cotangents many orders smaller than the last one's (1e-8 to 1e-50 of it), and solving
+//   those to their own relative tolerance would cost as much as the last solve for nothing
+//   the gradient can hold; every solve of the step so reaches the same absolute accuracy.
+// - The step's first solve starts from its solution at the later step of the backward pass
+//   (the cotangents change little from step to step); the others from 0, which is already
+//   within tolerance when their cotangent is that small.
 template <class Real>
 void newmark_adjoint(Interpreter<Real>& in, const OpNode& op, int b) {
   const Slots<Real> a{in, op, b};
   const NewmarkSystem<Real> system = newmark_system(in, a);
   const int o = int(&op - in.graph().ops().data());
+  const size_t n = 3 * size_t(in.grid().node_count);
   Real* w = in.scratch_real(o, "w", b);
-  std::fill_n(w, 3 * size_t(in.grid().node_count), Real(0));
+  typename Interpreter<Real>::AdjointSolves& solves = in.adjoint_solves(b);
+  std::vector<Real>* guess = solves.count == 0 ? in.newmark_adjoint_guess(b) : nullptr;
+  if (guess && guess->size() == n)
+    std::copy(guess->begin(), guess->end(), w);
+  else
+    std::fill_n(w, n, Real(0));
   const SolverOptions& opt = in.options();
-  double& reference = in.adjoint_solve_reference(b);
-  const PcgResult r = system.solve(a.bar("u"), w, opt.cg_tolerance, opt.cg_max_iterations, reference);
-  reference = std::max(reference, r.rhs_norm);
+  const PcgResult r = system.solve(a.bar("u"), w, opt.cg_tolerance, opt.cg_max_iterations, solves.reference);
+  solves.reference = std::max(solves.reference, r.rhs_norm);
+  ++solves.count;
+  if (guess) guess->assign(w, w + n);
   in.mutable_report().adjoint_cg_iterations[b] += r.iterations;
   if (!r.converged)
     throw SimulationError(fmt::format("the adjoint time-step solve did not converge (batch item {}): relative "
