@@ -523,13 +523,16 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
   int most = 0;
   for (int k = 0; k < batch; ++k) most = std::max(most, int(s[16 * k + 7]));
   last_iterations[tag] = most;
+  std::vector<int> failed;
   for (int k = 0; k < batch; ++k) {
     iterations[k] = int(s[16 * k + 7]);
-    if (s[16 * k + 9] == 0.0)
-      throw SimulationError(fmt::format("the {} did not converge on the GPU (batch item {}): relative residual "
-                                        "{:.3g} after {} CG iterations (tolerance {:.3g})",
-                                        what, k, s[16 * k + 8], iterations[k], tol));
+    if (s[16 * k + 9] == 0.0) failed.push_back(k);
   }
+  if (!failed.empty())
+    throw SimulationError(fmt::format("the {} did not converge on the GPU (batch item {}): relative residual "
+                                      "{:.3g} after {} CG iterations (tolerance {:.3g})",
+                                      what, failed[0], s[16 * failed[0] + 8], iterations[failed[0]], tol),
+                          failed);
   return iterations;
 }
 
@@ -563,17 +566,26 @@ void GpuTimestep::Impl::read_solve_checks() {
   cu::check(d->MemcpyDtoH(log.data(), scratch.at("s_cg_log").ptr, log.size() * 8), "download solver states");
   const std::vector<SolveCheck> checks = std::move(solve_checks);
   solve_checks.clear();
+  std::string first;
+  std::vector<char> failed(batch, 0);
   for (const SolveCheck& c : checks) {
     if (c.iterations && !c.add) c.iterations->assign(batch, 0);
     for (int k = 0; k < batch; ++k) {
       const double* st = log.data() + size_t(k) * per_item + 16 * size_t(c.slot);
       if (c.iterations) (*c.iterations)[k] += int(st[7]);
-      if (st[9] == 0.0)
-        throw SimulationError(fmt::format("the {} did not converge on the GPU (batch item {}): relative residual "
-                                          "{:.3g} after {} CG iterations (tolerance {:.3g})",
-                                          c.what, k, st[8], int(st[7]), c.tolerance));
+      if (st[9] != 0.0) continue;
+      if (first.empty())
+        first = fmt::format("the {} did not converge on the GPU (batch item {}): relative residual {:.3g} after {} CG "
+                            "iterations (tolerance {:.3g})",
+                            c.what, k, st[8], int(st[7]), c.tolerance);
+      failed[k] = 1;
     }
   }
+  if (first.empty()) return;
+  std::vector<int> items;
+  for (int k = 0; k < batch; ++k)
+    if (failed[k]) items.push_back(k);
+  throw SimulationError(first, items);
 }
 
 // One Real per batch item.

@@ -6,6 +6,8 @@
 #pragma once
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace ssc {
 
@@ -14,7 +16,11 @@ struct InputError : std::runtime_error {
 };
 
 struct SimulationError : std::runtime_error {
-  using std::runtime_error::runtime_error;
+  explicit SimulationError(const std::string& what, std::vector<int> batch_items = {})
+      : std::runtime_error(what), items(std::move(batch_items)) {}
+  // The batch items that went wrong, where known (empty: not known, or the whole batch):
+  // a batched fit drops those and runs the others on together.
+  std::vector<int> items;
 };
 
 struct GpuError : std::runtime_error {

@@ -126,7 +126,8 @@ void newmark_forward(Interpreter<Real>& in, const OpNode& op, int b) {
         "the time-step solve did not converge (batch item {}): relative residual {:.3g} after {} CG "
         "iterations (tolerance {:.3g}); the simulation is probably unstable: lower time.dt, or raise "
         "solver.max_iterations",
-        b, r.relative_residual, r.iterations, o.cg_tolerance));
+        b, r.relative_residual, r.iterations, o.cg_tolerance),
+                          {b});
 }
 
 // w = A^-1 u_bar (A symmetric) into the op's scratch buffer w; the op's adjoint parts
@@ -162,7 +163,8 @@ void newmark_adjoint(Interpreter<Real>& in, const OpNode& op, int b) {
   if (!r.converged)
     throw SimulationError(fmt::format("the adjoint time-step solve did not converge (batch item {}): relative "
                                       "residual {:.3g} after {} iterations",
-                                      b, r.relative_residual, r.iterations));
+                                      b, r.relative_residual, r.iterations),
+                          {b});
 }
 
 // Solves the band Laplacian L x = rhs (3 components; x starts from its content).
@@ -208,7 +210,8 @@ void extension_forward(Interpreter<Real>& in, const OpNode& op, int b) {
   if (!r.converged)
     throw SimulationError(fmt::format("the displacement extension did not converge (batch item {}): relative "
                                       "residual {:.3g} after {} iterations",
-                                      b, r.relative_residual, r.iterations));
+                                      b, r.relative_residual, r.iterations),
+                          {b});
 }
 
 template <class Real>
@@ -220,7 +223,8 @@ void extension_adjoint(Interpreter<Real>& in, const OpNode& op, int b) {
   y.resize(3 * size_t(g.band_count), Real(0));
   const SolverOptions& o = in.options();
   const PcgResult r = solve_band_laplacian(g, a.bar("band_u"), y.data(), o.extension_tolerance, o.extension_max_iterations);
-  if (!r.converged) throw SimulationError(fmt::format("the adjoint extension solve did not converge (batch item {})", b));
+  if (!r.converged)
+    throw SimulationError(fmt::format("the adjoint extension solve did not converge (batch item {})", b), {b});
   Real* u_bar = a.bar("u");
   for (int i = 0; i < g.band_count; ++i)
     for (int k = 0; k < 6; ++k) {

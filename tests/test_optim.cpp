@@ -1163,9 +1163,9 @@ TEST(ReconstructionEndToEnd, FiniteDifferenceGradientsTakeTheSameSteps) {
 
 TEST(ReconstructionFailures, ExplodingStartIsDroppedWithoutFailingTheOthers) {
   // Fitting the density: at 1e-6 kg/m^3 the contact forces throw the weightless body
-  // kilometres away in the second step (SimulationError "exploded"). The batch fails, is
-  // re-run start by start, and only that start is dropped; the other one gives exactly
-  // what it gives alone.
+  // kilometres away in the second step (SimulationError "exploded", naming its batch
+  // item). The batch fails and is run again without that start, which is dropped; the
+  // other one gives exactly what it gives alone.
   const Problem& problem = sphere_problem();
   ReconstructionOptions o;
   o.fit = {"density"};
@@ -1196,6 +1196,48 @@ TEST(ReconstructionFailures, ExplodingStartIsDroppedWithoutFailingTheOthers) {
   const ReconstructionResult alone = reconstruct(problem, o);
   EXPECT_TRUE(bitwise_equal(good.final, alone.starts[0].final));
   EXPECT_EQ(good.final_cost, alone.starts[0].final_cost);
+}
+
+// Every batch item that fails at one check is named (SimulationError::items), and a fit
+// drops exactly those starts and runs the others on as one batch: two weightless starts
+// among four explode in the second step; the other two give what they give alone.
+TEST(ReconstructionFailures, FailingStartsAreNamedAndTheOthersRunOnTogether) {
+  const Problem& problem = sphere_problem();
+  Simulation sim(problem.scene, problem.grid, 3, false);
+  for (int b : {0, 2}) {
+    PhysicalParameters p = sim.parameters(b);
+    p.density = 1e-6;
+    sim.set_parameters(b, p);
+  }
+  std::vector<int> named;
+  try {
+    for (int s = 0; s < 5; ++s) sim.step();
+  } catch (const SimulationError& e) {
+    named = e.items;
+    std::printf("%s\n", e.what());
+  }
+  EXPECT_EQ(named, (std::vector<int>{0, 2}));
+
+  ReconstructionOptions o;
+  o.fit = {"density"};
+  o.optimizer_options.max_iterations = 3;
+  o.initial_values = {vec({70.0}), vec({1e-6}), vec({90.0}), vec({1e-6})};
+  std::vector<int> active;
+  const ReconstructionResult r =
+      reconstruct(problem, o, [&](int, int n, double, const Vec&) { active.push_back(n); });
+  EXPECT_EQ(active, (std::vector<int>{4, 2, 2}));
+  ASSERT_EQ(r.starts.size(), 4u);
+  for (int s : {1, 3}) {
+    EXPECT_TRUE(r.starts[size_t(s)].failed);
+    EXPECT_NE(r.starts[size_t(s)].failure.find("exploded"), std::string::npos) << r.starts[size_t(s)].failure;
+  }
+  for (int s : {0, 2}) {
+    ASSERT_FALSE(r.starts[size_t(s)].failed) << r.starts[size_t(s)].failure;
+    o.initial_values = {r.starts[size_t(s)].initial};
+    const ReconstructionResult alone = reconstruct(problem, o);
+    EXPECT_TRUE(bitwise_equal(r.starts[size_t(s)].final, alone.starts[0].final));
+    EXPECT_EQ(r.starts[size_t(s)].final_cost, alone.starts[0].final_cost);
+  }
 }
 
 TEST(ReconstructionFailures, ALoneFailingStartIsReportedNotThrown) {

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <memory>
+#include <numeric>
 #include <random>
 
 #include "runtime/errors.h"
@@ -80,8 +81,10 @@ class StartSpace {
   Eigen::VectorXd held_;
 };
 
-// Evaluates the starts in `items` as one batch; on a simulation failure, one by one so
-// that only the failing starts are dropped. Returns false for a failed item.
+// Evaluates the starts at `points` as one batch. A simulation failure that names its batch
+// items (SimulationError::items) drops those starts and runs the others again as one batch;
+// one that does not, one start at a time, so that only the failing starts are dropped.
+// Returns false for a failed start.
 std::vector<bool> evaluate_batch(BatchSimulations& sims, const Problem& problem, const SurfaceConstraintCost& cost,
                                  const PhysicalParameters& base,
                                  const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& points,
@@ -93,28 +96,42 @@ std::vector<bool> evaluate_batch(BatchSimulations& sims, const Problem& problem,
   std::vector<bool> ok(n, true);
   results->assign(n, CostGradient{});
   failures->assign(n, "");
-  try {
-    Simulation& sim = sims.batch(n);
-    for (int i = 0; i < sim.batch(); ++i) sim.set_parameters(i, with_values(base, names, points[size_t(i < n ? i : 0)]));
-    *results = evaluate_cost_gradient(sim, cost, problem.frames, options);
-    results->resize(size_t(n));
-    return ok;
-  } catch (const SimulationError& e) {
-    sims.forget();
-    if (n == 1) {
-      ok[0] = false;
-      (*failures)[0] = e.what();
+  std::vector<int> pending(n);
+  std::iota(pending.begin(), pending.end(), 0);
+  while (!pending.empty()) {
+    const int m = int(pending.size());
+    std::vector<int> named;
+    try {
+      Simulation& sim = sims.batch(m);
+      // Places beyond m (a larger batch kept on the GPU) run copies of the first start.
+      for (int i = 0; i < sim.batch(); ++i)
+        sim.set_parameters(i, with_values(base, names, points[size_t(pending[size_t(i < m ? i : 0)])]));
+      const std::vector<CostGradient> r = evaluate_cost_gradient(sim, cost, problem.frames, options);
+      for (int i = 0; i < m; ++i) (*results)[size_t(pending[size_t(i)])] = r[size_t(i)];
       return ok;
+    } catch (const SimulationError& e) {
+      sims.forget();
+      for (int item : e.items) named.push_back(pending[size_t(item < m ? item : 0)]);
+      if (named.empty() && m == 1) named.push_back(pending[0]);
+      if (named.empty()) break;
+      for (int s : named) {
+        ok[size_t(s)] = false;
+        (*failures)[size_t(s)] = e.what();
+      }
     }
+    std::vector<int> rest;
+    for (int s : pending)
+      if (ok[size_t(s)]) rest.push_back(s);
+    pending = rest;
   }
-  for (int i = 0; i < n; ++i) {
+  for (int s : pending) {
     try {
       const std::unique_ptr<Simulation> sim = sims.make(1);
-      sim->set_parameters(0, with_values(base, names, points[i]));
-      (*results)[i] = evaluate_cost_gradient(*sim, cost, problem.frames, options)[0];
+      sim->set_parameters(0, with_values(base, names, points[size_t(s)]));
+      (*results)[size_t(s)] = evaluate_cost_gradient(*sim, cost, problem.frames, options)[0];
     } catch (const SimulationError& e) {
-      ok[i] = false;
-      (*failures)[i] = e.what();
+      ok[size_t(s)] = false;
+      (*failures)[size_t(s)] = e.what();
     }
   }
   return ok;

@@ -40,7 +40,7 @@ void SimulationAudit::check(const Simulation& sim, int b, int step, const char* 
       throw SimulationError(fmt::format(
           "{} {}: the simulation exploded (batch item {}): a node is {:.3g} m from the body's rest box, beyond any "
           "motion the initial velocity and gravity allow ({:.3g} m by t = {:.3g} s); lower time.dt or the ground stiffness",
-          when, step, b, rest_box.exteriorDistance(x), reach, t));
+          when, step, b, rest_box.exteriorDistance(x), reach, t), {b});
   }
   const Simulation::CellScan cells = sim.scan_cells(b);
   if (tolerance > 0) {
@@ -56,7 +56,7 @@ void SimulationAudit::check(const Simulation& sim, int b, int step, const char* 
           "solver.nonlinear_iterations or lower time.dt; or lower ground.stiffness or ground.softmin_alpha) or for a "
           "fast spin (the cells' rotation stores spurious elastic energy growing with (omega dt)^2: lower time.dt, or "
           "set solver.corotation to \"updated\")",
-          when, step, b, energy_start, total, kinetic, elastic, contact, gravity, tolerance, energy_scale));
+          when, step, b, energy_start, total, kinetic, elastic, contact, gravity, tolerance, energy_scale), {b});
   }
   if (cells.inverted > 0 && first_inverted_step < 0) first_inverted_step = step;
   inverted_cells = std::max(inverted_cells, cells.inverted);

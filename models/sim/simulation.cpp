@@ -90,7 +90,8 @@ void Simulation::set_parameters(int b, const PhysicalParameters& p) {
     throw std::logic_error("the number of ground planes is part of the graph and cannot change");
   if (p.region_youngs.size() != params_[b].region_youngs.size())
     throw std::logic_error("the number of material regions is part of the graph and cannot change");
-  if (const std::string inside = initial_penetration(grid_, p); !inside.empty()) throw SimulationError("step 0: " + inside);
+  if (const std::string inside = initial_penetration(grid_, p); !inside.empty())
+    throw SimulationError("step 0: " + inside, {b});
   params_[b] = p;
   reset();
 }
@@ -170,18 +171,34 @@ void Simulation::check_state(int b, const char* when) {
     if (!std::isfinite(u[i]))
       throw SimulationError(fmt::format("{} {}: the simulation produced a non-finite displacement (batch item {}); "
                                         "lower time.dt or the ground stiffness",
-                                        when, steps_, b));
+                                        when, steps_, b),
+                            {b});
   audits_[b].check(*this, b, steps_, when);
 }
 
 // Items in parallel when there are enough of them to fill the threads; else one after the
-// other, each with its parallel loop over the cells.
+// other, each with its parallel loop over the cells. Every item is checked: the error is the
+// first failing item's, naming all failing items.
 void Simulation::check_states(const char* when) {
-  if (batch() >= omp_get_max_threads()) {
-    for_each_batch_item(batch(), [&](int b) { check_state(b, when); });
-  } else {
-    for (int b = 0; b < batch(); ++b) check_state(b, when);
-  }
+  std::vector<std::string> errors(batch());
+  auto check = [&](int b) {
+    try {
+      check_state(b, when);
+    } catch (const SimulationError& e) {
+      errors[b] = e.what();
+    }
+  };
+  if (batch() >= omp_get_max_threads())
+    for_each_batch_item(batch(), check);
+  else
+    for (int b = 0; b < batch(); ++b) check(b);
+  std::vector<int> failed;
+  for (int b = 0; b < batch(); ++b)
+    if (!errors[b].empty()) failed.push_back(b);
+  if (failed.empty()) return;
+  std::string message = errors[failed[0]];
+  if (failed.size() > 1) message += fmt::format(" ({} batch items failed here)", failed.size());
+  throw SimulationError(message, failed);
 }
 
 void Simulation::step(bool to_host) { advance(to_host, -1); }
@@ -203,7 +220,7 @@ void Simulation::advance(bool to_host, int keep_key) {
     backend_->copy_tensors(next);
     device_current_ = true;
   } catch (const SimulationError& e) {
-    throw SimulationError(fmt::format("step {}: {}", steps_ + 1, e.what()));
+    throw SimulationError(fmt::format("step {}: {}", steps_ + 1, e.what()), e.items);
   }
   ++steps_;
   if (!to_host) {
