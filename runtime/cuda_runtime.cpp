@@ -53,8 +53,7 @@ bool disabled_by_env(const char* name) {
 GpuTimestep::Impl::~Impl() {
   if (!d) return;
   d->CtxSetCurrent(ctx);
-  for (Buffer& x : tensors) d->MemFree(x.ptr);
-  for (Buffer* x : {&adjoint_arena, &saved_adjoints, &chain_staging})
+  for (Buffer* x : {&tensor_arena, &adjoint_arena, &saved_adjoints, &chain_staging})
     if (x->ptr) d->MemFree(x->ptr);
   for (auto& [n, x] : grid_buffers) d->MemFree(x.ptr);
   for (auto& [k, x] : snapshots) d->MemFree(x.ptr);
@@ -216,8 +215,20 @@ void GpuTimestep::Impl::setup() {
   std::vector<const PlannedKernel*> forward;
   for (const PlannedKernel& k : plan.forward) forward.push_back(&k);
   compile_and_load(forward);
-  for (const TensorInfo& t : graph.tensors())
-    tensors.push_back(alloc(size_t(batch) * count(t.domain) * t.components * real_size));
+  // One arena, the inputs first, then the states and intermediates in tensor order, each
+  // 256-byte aligned: a stored step (all but the inputs) is one copy.
+  std::vector<size_t> offset(graph.tensors().size()), bytes(graph.tensors().size());
+  size_t end = 0;
+  for (bool inputs : {true, false})
+    for (size_t t = 0; t < graph.tensors().size(); ++t) {
+      const TensorInfo& info = graph.tensor(int(t));
+      if ((info.role == TensorInfo::Role::Input) != inputs) continue;
+      bytes[t] = std::max<size_t>(size_t(batch) * count(info.domain) * info.components * real_size, 16);
+      offset[t] = end;
+      end += (bytes[t] + 255) / 256 * 256;
+    }
+  tensor_arena = alloc(end);
+  for (size_t t = 0; t < graph.tensors().size(); ++t) tensors.push_back({tensor_arena.ptr + offset[t], bytes[t]});
   upload_grid();
   allocate_scratch(plan.forward);
   cg_iterations.assign(batch, 0);
@@ -625,11 +636,25 @@ void GpuTimestep::copy_tensors(const std::vector<std::pair<int, int>>& from_to) 
   }
 }
 
+// The tensors' memory as runs of adjacent buffers (tensor_arena): a stored step is one copy.
+std::vector<GpuTimestep::Impl::Buffer> GpuTimestep::Impl::runs(const std::vector<int>& list) const {
+  std::vector<Buffer> out;
+  for (int t : list) {
+    const Buffer& x = tensors.at(t);
+    if (!out.empty() && out.back().ptr + (out.back().bytes + 255) / 256 * 256 == x.ptr)
+      out.back().bytes = x.ptr + x.bytes - out.back().ptr;
+    else
+      out.push_back(x);
+  }
+  return out;
+}
+
 void GpuTimestep::save_snapshot(int key, const std::vector<int>& tensors) {
   Impl& m = *impl_;
   cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
+  const std::vector<Impl::Buffer> runs = m.runs(tensors);
   size_t bytes = 0;
-  for (int t : tensors) bytes += m.tensors.at(t).bytes;
+  for (const Impl::Buffer& r : runs) bytes += r.bytes;
   auto it = m.snapshots.find(key);
   if (it == m.snapshots.end()) {
     auto spare = std::find_if(m.spare_snapshots.begin(), m.spare_snapshots.end(),
@@ -651,10 +676,9 @@ void GpuTimestep::save_snapshot(int key, const std::vector<int>& tensors) {
   }
   if (it->second.bytes < bytes) throw std::logic_error("gpu: save_snapshot with more tensors than the key holds");
   size_t offset = 0;
-  for (int t : tensors) {
-    const Impl::Buffer& x = m.tensors[t];
-    cu::check(m.d->MemcpyDtoD(it->second.ptr + offset, x.ptr, x.bytes), "save snapshot");
-    offset += x.bytes;
+  for (const Impl::Buffer& r : runs) {
+    cu::check(m.d->MemcpyDtoD(it->second.ptr + offset, r.ptr, r.bytes), "save snapshot");
+    offset += r.bytes;
   }
 }
 
@@ -664,11 +688,10 @@ void GpuTimestep::load_snapshot(int key, const std::vector<int>& tensors) {
   if (it == m.snapshots.end()) throw std::logic_error("gpu: load_snapshot of a key never saved");
   cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
   size_t offset = 0;
-  for (int t : tensors) {
-    const Impl::Buffer& x = m.tensors.at(t);
-    if (offset + x.bytes > it->second.bytes) throw std::logic_error("gpu: load_snapshot of more than was saved");
-    cu::check(m.d->MemcpyDtoD(x.ptr, it->second.ptr + offset, x.bytes), "load snapshot");
-    offset += x.bytes;
+  for (const Impl::Buffer& r : m.runs(tensors)) {
+    if (offset + r.bytes > it->second.bytes) throw std::logic_error("gpu: load_snapshot of more than was saved");
+    cu::check(m.d->MemcpyDtoD(r.ptr, it->second.ptr + offset, r.bytes), "load snapshot");
+    offset += r.bytes;
   }
 }
 

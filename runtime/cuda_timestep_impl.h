@@ -76,7 +76,7 @@ struct GpuTimestep::Impl {
   std::vector<Buffer> tensors;
   // Cotangents, allocated with the adjoint kernels: one arena, the inputs' first (so each
   // clear is one memset), a view per tensor; the copy kept by save_adjoints.
-  Buffer adjoint_arena, saved_adjoints, chain_staging;
+  Buffer tensor_arena, adjoint_arena, saved_adjoints, chain_staging;
   size_t adjoint_input_bytes = 0;
   // State snapshots by key, and released buffers kept for reuse (cuMemFree synchronises).
   std::map<int, Buffer> snapshots;
@@ -163,7 +163,8 @@ struct GpuTimestep::Impl {
   void solve_adjoint(int op);
   void newmark_setup(int op, cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x);
   void newmark(int op);
-  void clear_warm_starts();  // the adjoint time-step solves' warm starts, for a new backward pass
+  void clear_warm_starts();
+  std::vector<Buffer> runs(const std::vector<int>& tensors) const;  // of adjacent tensor buffers  // the adjoint time-step solves' warm starts, for a new backward pass
   void extension(int op);
   void run();
   void adjoint_newmark(int op);
