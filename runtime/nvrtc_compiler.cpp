@@ -214,9 +214,6 @@ CompiledKernel compile_kernel(const std::string& name, const std::string& source
       throw NvrtcError(fmt::format("NVRTC rejected the options for kernel {} (arch {}):\n{}", name, o.arch, k.log));
   }
   k.resources = parse_ptxas_log(k.log, name);
-  // With many programs compiling at once NVRTC has now and then returned a CUBIN with an
-  // empty log (2 of 359 kernels on a 16-core machine): compiled once more, for the resources.
-  if (k.is_cubin && !k.resources.known && run(opts, true)) k.resources = parse_ptxas_log(k.log, name);
   k.compile_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (const char* d = std::getenv("SSC_DUMP_KERNELS"); d && *d && !k.log.empty())
     std::ofstream(fs::path(d) / (name + ".log")) << k.log;
