@@ -317,8 +317,8 @@ struct GridPcg {
                                      int half, double* barrier)
       : x(x_), b(b_), inv_diag(inv_diag_), r(r_), w(w_), s(s_), z(z_), p(p_), iterations(iterations_), tol(tol_),
         max_it(max_it_), log_slot(log_slot_), cg(cg_), cg_log(cg_log_), reference(reference_),
-        reference_mode(reference_mode_), bar(reinterpret_cast<unsigned long long*>(barrier)), partial0(partial), partial1(partial + half),
-        rank(grid_rank()), threads(grid_threads()) {}
+        reference_mode(reference_mode_), bar(reinterpret_cast<unsigned long long*>(barrier)), partial0(partial),
+        partial1(partial + half), rank(grid_rank()), threads(grid_threads()) {}
 
   template <int N>
   __device__ __forceinline__ void sum(double (&v)[N]) {

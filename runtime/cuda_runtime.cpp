@@ -708,6 +708,7 @@ size_t GpuTimestep::free_device_memory() const {
   cu::check(m.d->CtxSetCurrent(m.ctx), "cuCtxSetCurrent");
   size_t free = 0, total = 0;
   cu::check(m.d->MemGetInfo(&free, &total), "cuMemGetInfo");
+  for (const Impl::Buffer& x : m.spare_snapshots) free += x.bytes;  // kept for the next stored steps
   return free;
 }
 

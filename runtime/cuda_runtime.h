@@ -99,7 +99,8 @@ class GpuTimestep : public StepBackend {
   void save_snapshot(int key, const std::vector<int>& tensors) override;
   void load_snapshot(int key, const std::vector<int>& tensors) override;
   void drop_snapshot(int key) override;
-  size_t free_device_memory() const override;  // bytes, as the driver reports them now
+  // Bytes, as the driver reports them now, and the buffers of dropped snapshots kept for reuse.
+  size_t free_device_memory() const override;
 
   // Adjoint of the step whose forward values the device holds: those the last run()
   // computed, or a kept step put back by load_snapshot (the adjoint reads no other state). clear_adjoints(true) zeroes every cotangent and starts a backward pass;

@@ -191,6 +191,7 @@ void Interpreter<Real>::run_adjoint() {
 template <class Real>
 void Interpreter<Real>::run_op_adjoint(int op) {
   adjoint_solves_.assign(batch(), {});
+  warm_adjoint_solves_ = false;
   report_.adjoint_cg_iterations.assign(batch(), 0);
   execute_adjoint(graph_.ops().at(op));
 }
