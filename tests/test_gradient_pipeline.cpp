@@ -524,7 +524,9 @@ TEST(GradientPipeline, ConvergedIterationsAdjointSolvesStopAtOnce) {
     std::printf("step %2d: adjoint CG iterations %3ld with the shared reference, %3ld with each solve relative\n",
                 n + 1, iterations[0], iterations[1]);
     EXPECT_LE(iterations[0], iterations[1]) << "step " << n + 1;
-    if (n < 3) EXPECT_LT(2 * iterations[0], iterations[1]) << "step " << n + 1 << " (in flight)";
+    if (n < 3) {
+      EXPECT_LT(2 * iterations[0], iterations[1]) << "step " << n + 1 << " (in flight)";
+    }
   }
   std::printf("largest relative difference of a cotangent: %.2e\n", worst);
   EXPECT_LT(worst, 1e-9);
