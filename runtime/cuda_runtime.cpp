@@ -48,6 +48,14 @@ bool disabled_by_env(const char* name) {
   return e && std::string(e) == "0";
 }
 
+// The message of a solve that did not converge for batch item `item`, from its solver
+// state (16 doubles: 7 iterations, 8 relative residual; codegen/solver_kernels.cuh).
+std::string solve_failure(const std::string& what, int item, const double* state, double tolerance) {
+  return fmt::format("the {} did not converge on the GPU (batch item {}): relative residual {:.3g} after {} CG "
+                     "iterations (tolerance {:.3g})",
+                     what, item, state[8], int(state[7]), tolerance);
+}
+
 }  // namespace
 
 GpuTimestep::Impl::~Impl() {
@@ -540,10 +548,7 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
     if (s[16 * k + 9] == 0.0) failed.push_back(k);
   }
   if (!failed.empty())
-    throw SimulationError(fmt::format("the {} did not converge on the GPU (batch item {}): relative residual "
-                                      "{:.3g} after {} CG iterations (tolerance {:.3g})",
-                                      what, failed[0], s[16 * failed[0] + 8], iterations[failed[0]], tol),
-                          failed);
+    throw SimulationError(solve_failure(what, failed[0], s.data() + 16 * failed[0], tol), failed);
   return iterations;
 }
 
@@ -586,9 +591,7 @@ void GpuTimestep::Impl::read_solve_checks() {
       if (c.iterations) (*c.iterations)[k] += int(st[7]);
       if (st[9] != 0.0) continue;
       if (first.empty())
-        first = fmt::format("the {} did not converge on the GPU (batch item {}): relative residual {:.3g} after {} CG "
-                            "iterations (tolerance {:.3g})",
-                            c.what, k, st[8], int(st[7]), c.tolerance);
+        first = solve_failure(c.what, k, st, c.tolerance);
       failed[k] = 1;
     }
   }
