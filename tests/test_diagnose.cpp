@@ -177,6 +177,39 @@ TEST_F(DiagnoseCli, BadInputIsAnInputErrorAndWritesNothing) {
   EXPECT_FALSE(fs::exists(dir_ / "d"));
 }
 
+// A cube slowed by a drag no air has (25 kg/m^3, 20 times air's): the air-drag fit runs into
+// the end of its plausible range (0 .. 1.5 kg/m^3) and is not named, and the report says what
+// it would need; the scene's "plausible" section widens the range, and then the fit is inside.
+TEST_F(DiagnoseCli, AirDragThatNeedsAnImplausibleDensityIsNotNamed) {
+  json scene = cube_scene(0.01, 0.0, 5e4, true);
+  scene["air_drag"] = 25.0;
+  observe(scene, "obs");
+  json fit = cube_scene(0.01, 0.0, 1.25e5, false);
+  auto run_drag = [&](const std::string& out_name) {
+    std::string out, err;
+    const std::string path = write("fit.json", fit);
+    EXPECT_EQ(run("diagnose '" + path + "' --observations '" + (dir_ / "obs").string() + "' --out '" +
+                      (dir_ / out_name).string() + "' --candidates air_drag --starts 2 --iterations 12 --device cpu",
+                  &out, &err),
+              0)
+        << err;
+    std::printf("%s", out.c_str());
+    return std::make_pair(read_json(dir_ / out_name / "diagnosis.json"), out);
+  };
+  const auto [d, printed] = run_drag("diag");
+  ASSERT_EQ(d["candidates"].size(), 1u);
+  const json& drag = d["candidates"][0];
+  EXPECT_NE(d["cause"], "air_drag");
+  ASSERT_FALSE(drag["implausible"].empty()) << drag.dump();
+  EXPECT_NE(drag["implausible"][0].get<std::string>().find("upper end of its plausible range"), std::string::npos);
+  EXPECT_LE(drag["extra_parameters"]["air_drag"].get<double>(), 1.5);
+  fit["plausible"] = {{"air_drag", {0, 100}}};
+  const json wide = run_drag("wide").first;
+  const json& drag_wide = wide["candidates"][0];
+  EXPECT_TRUE(drag_wide["implausible"].empty()) << drag_wide.dump();
+  EXPECT_GT(drag_wide["extra_parameters"]["air_drag"].get<double>(), 1.5);
+}
+
 TEST_F(DiagnoseCli, AirDragAndMassDampingTradeOffWhereTheYoungsModulusIsDetermined) {
   // The classic pair: quadratic air drag and Rayleigh mass damping both slow the cube along
   // its path; over a 0.8 s throw one stands in for the other. The Young's modulus, which sets

@@ -2,29 +2,26 @@
 //
 // The observed frames are split in time: the first part is held in (fitted), the rest held
 // out (leave-future-out). The base model (the scene, the --fit parameters) is fitted on the
-// held-in frames; so is each candidate extension (the base parameters plus the extension's
-// own; the same starts for the base parameters, the same iterations), and a placebo of the
-// same number of extra parameters that stand for no missing effect (initial velocity
-// components the base leaves alone, those the body's motion does not use first). The base,
-// the placebos and the extensions with an "off" value (friction, air drag, a stiffness
-// gradient) share one graph and are fitted as one batch, each start moving only its own
-// model's parameters; the Neo-Hookean material and a second plane (proposed from where the
-// base fit overshoots the data) are batches of their own.
-// Each fitted model then predicts the held-out frames; a candidate's gain is the fraction of
-// the base model's held-out cost (J_SSC) it removes, with a moving-block bootstrap interval
-// over the held-out frames. A candidate is named when its gain is at least `min_gain` and its
-// interval's lower end beats its placebo's gain by `margin`; the cause is the named candidate
-// with the largest gain, or "none". Two named candidates whose gains differ by less than their
-// difference's interval are reported as confounded. Each candidate is also scored, in-sample
-// with an Akaike penalty, on the held-in frames after the event it is about (reported only).
-// Identifiability: at the cause's fit, the Gauss-Newton matrix of the held-in residuals over
-// its parameters, the other candidates' that share its graph and the mass damping
-// (parameter_correlation below); two of them with a correlation near +-1 trade one for the
-// other: the data cannot tell them apart ("air drag or mass damping").
-// A score test ranks the candidates that have parameters with an "off" value: the held-in
-// cost's gradient at the base fit with the extension at off (friction, air drag, a stiffness
-// gradient: one backward pass for all), as the cost decrease it predicts for a typical amount
-// of the effect.
+// held-in frames; so is each candidate extension of the extension table
+// (models/sim/extensions.h: the base parameters plus the extension's own; the same starts for
+// the base parameters, the same iterations), and a placebo of the same number of extra
+// parameters that stand for no missing effect. Every fitted parameter stays within its
+// plausible range. The steps, each in its own file:
+//   model_fit.h        the fits, as few batches as the models' graphs allow
+//   candidates.h       the candidates' and placebos' models, and the proposals from the data
+//                      (planes where the fitted body goes and the observations do not; a
+//                      material interface across the fitted stiffness gradient)
+//   score_test.h       a ranking of the candidates with an "off" value from one backward pass
+//   held_out.h         the gain on the held-out frames with a bootstrap interval; the event
+//   identifiability.h  which parameters trade one for the other at the cause's fit
+// A candidate is named when its held-out gain is at least `min_gain`, its interval's lower end
+// beats its placebo's gain by `margin`, and its fit stays inside every plausible range (a fit
+// at a range's end needs a value no physical object has: reported, not named); the cause is
+// the named candidate with the largest gain, or "none". Two named candidates whose gains differ
+// by less than their difference's interval are reported as confounded. A candidate that fits
+// the held-in and the held-out frames as well as the base (both gains' intervals contain 0)
+// while it moves a base parameter is reported as undecided: these data cannot tell the two
+// models apart, and the base parameter depends on which is right.
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
@@ -36,19 +33,15 @@
 #include <tuple>
 #include <vector>
 
+#include "models/diagnosis/identifiability.h"
+#include "models/sim/extensions.h"
 #include "models/sim/problem.h"
 
 namespace ssc {
 
-inline const std::vector<std::string>& diagnosis_candidate_names() {
-  static const std::vector<std::string> names = {"friction", "heterogeneous_stiffness", "second_plane",
-                                                 "nonlinear_material", "air_drag"};
-  return names;
-}
-
 struct DiagnosisOptions {
   std::vector<std::string> fit = {"youngs_modulus"};  // the base model's fitted parameters
-  std::vector<std::string> candidates = diagnosis_candidate_names();
+  std::vector<std::string> candidates = extension_names();
   int starts = 8, iterations = 30;
   std::uint64_t seed = 1;
   std::string optimizer = "rprop";
@@ -70,6 +63,9 @@ struct FittedModel {
   double heldin_cost = 0, heldout_cost = 0;
   bool failed = false;
   std::string failure, note;
+  std::string stop_reason;         // of the best start
+  int starts = 0, converged_starts = 0;
+  std::string proposal;            // what the data proposed (a plane, an interface), if anything
   double seconds = 0;
 };
 
@@ -86,24 +82,11 @@ struct CandidateVerdict {
   int event_frame = -1;
   double event_gain = std::numeric_limits<double>::quiet_NaN();
   double event_aic = std::numeric_limits<double>::quiet_NaN();
+  // The fit's parameters at an end of their plausible range ("air_drag = 1.5 kg/m^3 at the
+  // upper end of its plausible range [0, 1.5] (air: ...)"): such a candidate is not named.
+  std::vector<std::string> implausible;
   std::vector<std::string> warnings;
 };
-
-// How well the data determine parameters at a point: the Gauss-Newton matrix J^T J of the
-// cost's residuals (each observed point's robust residual r, its cost term r^2 / 2), J from
-// forward differences (step steps[j]) of n + 1 simulations run as one batch; its inverse (the
-// parameters' covariance up to a factor) scaled to a unit diagonal is their correlation. A
-// correlation near +-1: the data fix a combination of the two, not each. Parameters the
-// residuals do not depend on there are left out (`flat`); `failure` says why there is no
-// correlation (fewer than two parameters left).
-struct ParameterCorrelation {
-  std::vector<std::string> names, flat;  // names: the parameters of gauss_newton and correlation
-  Eigen::MatrixXd gauss_newton, correlation;
-  std::string failure;
-};
-ParameterCorrelation parameter_correlation(const Problem& problem, const PhysicalParameters& at,
-                                           const std::vector<std::string>& names, const std::vector<double>& steps,
-                                           const std::string& device);
 
 struct Diagnosis {
   int heldin_frames = 0, heldout_frames = 0;
@@ -116,6 +99,10 @@ struct Diagnosis {
   ParameterCorrelation identifiability;  // at the cause's fit (empty names: not assessed)
   // Pairs of parameters whose correlation there is at least 0.95 in size, with it.
   std::vector<std::tuple<std::string, std::string, double>> indistinguishable;
+  // Candidates the data cannot tell from the base model, with the base parameters that differ
+  // between the two by more than 10 %: (candidate, "youngs_modulus 8.1 kPa with the base model,
+  // 5.2 kPa with nonlinear_material").
+  std::vector<std::pair<std::string, std::string>> undecided;
   std::vector<std::string> lines;  // what to tell the user
   double seconds = 0;
 };

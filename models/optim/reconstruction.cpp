@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -196,6 +197,20 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
     if (const auto m = o.typical_magnitudes.find(result.names[i]);
         m != o.typical_magnitudes.end() && axes.back().kind == ParameterAxis::Kind::Free)
       axes.back().scale = std::max(std::abs(result.nominal[i]), m->second);
+    if (const auto b = o.bounds.find(result.names[i]); b != o.bounds.end() && std::isfinite(b->second.second)) {
+      ParameterAxis& a = axes.back();
+      const double lower = std::isfinite(b->second.first) ? b->second.first
+                           : a.kind == ParameterAxis::Kind::Positive ? 0.0
+                                                                     : std::numeric_limits<double>::quiet_NaN();
+      if (std::isfinite(lower)) {
+        if (a.kind == ParameterAxis::Kind::Bounded) a.lower = std::max(a.lower, lower), a.upper = std::min(a.upper, b->second.second);
+        else a.lower = lower, a.upper = b->second.second;
+        a.kind = ParameterAxis::Kind::Bounded;
+        if (!(a.lower < a.upper))
+          throw InputError(fmt::format("{}: the bounds [{:g}, {:g}] leave no value", result.names[i], b->second.first,
+                                       b->second.second));
+      }
+    }
     if (axes.back().kind == ParameterAxis::Kind::Positive && !(result.nominal[i] > 0))
       throw InputError(fmt::format("{}: --fit {}: its value in the scene is {:g}; the starts of a positive parameter are "
                                    "drawn from 0.1 to 10 times it, so give the scene a nominal value above 0 (e.g. "

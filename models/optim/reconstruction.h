@@ -34,6 +34,10 @@ struct ReconstructionOptions {
   // Typical magnitudes of free parameters (the optimiser's coordinate is x / max(|nominal|,
   // magnitude); default 1 in the parameter's unit), by name.
   std::map<std::string, double> typical_magnitudes;
+  // Bounds [lower, upper] that fits of these parameters stay strictly within (plausible
+  // ranges, models/sim/extensions.h): their axis becomes the sigmoid onto the bounds, for
+  // every optimiser. An infinite end keeps the parameter's own transform.
+  std::map<std::string, std::pair<double, double>> bounds;
   std::vector<Eigen::VectorXd> initial_values;  // overrides the sampling when non-empty (one per start)
   // With initial_values: per start, the indices of the parameters it moves; the others keep
   // their initial values (which then need not be valid on their axis: friction 0, say).

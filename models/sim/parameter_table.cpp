@@ -14,6 +14,13 @@ namespace {
 
 constexpr double kDegree = 3.14159265358979323846 / 180.0;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Plausible ranges (docs/decisions.md, "Plausible ranges").
+void set_plausible(ParameterRow& r, double lower, double upper, const char* source) {
+  r.plausible_lower = lower, r.plausible_upper = upper;
+  r.plausible_source = source;
+}
+const char* const kModulusSource = "solids from the softest gels (10 Pa) to diamond (1.2e12 Pa)";
 const char* const kAxes[3] = {"x", "y", "z"};
 
 std::string plane_prefix(size_t k) { return k == 0 ? "ground." : fmt::format("ground.planes[{}].", k); }
@@ -117,7 +124,10 @@ void add_plane_rows(std::vector<ParameterRow>& rows, size_t k) {
     r.unit = velocity ? "m/s" : "1";
     if (velocity) r.length = 1, r.time = -1;
     r.transform = velocity ? ParameterRow::Transform::Positive : ParameterRow::Transform::Bounded;
-    if (!velocity) r.optimiser_lower = 0, r.optimiser_upper = 2;
+    if (!velocity) {
+      r.optimiser_lower = 0, r.optimiser_upper = 2;
+      set_plausible(r, 0, 1.5, "dry contact: 0.04 (PTFE) to about 1.5 (rubber)");
+    }
     r.lower = 0, r.lower_inclusive = !velocity;
     r.scene_key = key + (velocity ? "friction_velocity" : "friction");
     r.graph_input = "friction";
@@ -143,6 +153,7 @@ void add_stiffness_field_rows(std::vector<ParameterRow>& rows, size_t region_cou
     r.lower = 0;
     r.scene_key = r.name;
     r.graph_input = "region_youngs";
+    set_plausible(r, 10, 1.2e12, kModulusSource);
     r.graph_component = int(k);
     r.get = [k](const PhysicalParameters& p) { return p.region_youngs[k]; };
     r.set = [k](PhysicalParameters& p, double v) { p.region_youngs[k] = v; };
@@ -187,6 +198,8 @@ std::vector<ParameterRow> parameter_table(const PhysicalParameters& p) {
       material_row("mass_damping", "1/s", 0, 0, -1, &PP::mass_damping, &PG::mass_damping),
       material_row("stiffness_damping", "s", 0, 0, 1, &PP::stiffness_damping, &PG::stiffness_damping),
   };
+  set_plausible(rows[0], 10, 1.2e12, kModulusSource);
+  set_plausible(rows[2], 1, 22600, "aerogels (1 kg/m^3) to osmium (22600 kg/m^3)");
   ParameterRow& nu = rows[1];
   nu.transform = ParameterRow::Transform::Bounded;
   nu.optimiser_lower = 0.01, nu.optimiser_upper = 0.49;
@@ -205,6 +218,7 @@ std::vector<ParameterRow> parameter_table(const PhysicalParameters& p) {
   drag.transform = ParameterRow::Transform::Positive;
   drag.lower = 0, drag.lower_inclusive = true;
   drag.graph_component = 0;
+  set_plausible(drag, 0, 1.5, "air: 1.2 kg/m^3; 0 to 1.5 covers the drag of common shapes in air");
   drag.get = [](const PhysicalParameters& p) { return p.air_drag; };
   drag.set = [](PhysicalParameters& p, double v) { p.air_drag = v; };
   drag.gradient = [](const ParameterGradient& g, const PhysicalParameters&) { return g.input_entry("air_drag", 0); };

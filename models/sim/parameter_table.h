@@ -26,6 +26,11 @@ struct ParameterRow {
   // Valid values: lower < x < upper (or <= where inclusive).
   double lower = -std::numeric_limits<double>::infinity(), upper = std::numeric_limits<double>::infinity();
   bool lower_inclusive = false, upper_inclusive = false;
+  // Values a physical object can have (docs/decisions.md, "Plausible ranges"): a fit is
+  // bounded by them and a diagnosis names no cause outside them. Unlimited by default.
+  double plausible_lower = -std::numeric_limits<double>::infinity();
+  double plausible_upper = std::numeric_limits<double>::infinity();
+  std::string plausible_source;  // what the range stands for, for messages
   std::string scene_key;    // where the scene sets it, e.g. "material.youngs_modulus", "gravity[1]"
   std::string graph_input;  // the timestep graph's input tensor it feeds (models/sim/timestep_graph.h)
   // The entry of graph_input (per batch item) that holds the value as it is: the simulation

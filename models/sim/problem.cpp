@@ -2,6 +2,7 @@
 #include "models/sim/problem.h"
 
 #include "models/sim/body.h"
+#include "models/sim/extensions.h"
 #include "models/sim/observation_setup.h"
 
 namespace ssc {
@@ -11,11 +12,7 @@ Problem load_problem(const std::string& scene_path, const std::vector<std::strin
                      const std::vector<std::string>& parameters) {
   Problem p;
   p.scene = load_scene(scene_path, overrides);
-  for (const std::string& name : parameters) {  // a fitted extension is modelled
-    if (name.find("friction") != std::string::npos) p.scene.friction_keys = true;
-    if (name.rfind("material.stiffness_gradient", 0) == 0) p.scene.material.stiffness_gradient_key = true;
-    if (name == "air_drag") p.scene.air_drag_key = true;
-  }
+  model_fitted_extensions(p.scene, parameters);
   p.grid = build_body_grid(p.scene);
   p.observations = read_observations(observation_dir);
   p.frames = observed_frames(p.observations, p.scene.time.dt, observation_dir);

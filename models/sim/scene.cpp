@@ -8,6 +8,8 @@
 
 #include "runtime/errors.h"
 #include "models/io/json_reader.h"
+#include "models/sim/extensions.h"
+#include "models/sim/parameter_table.h"
 #include "models/sim/parameters.h"
 
 namespace ssc {
@@ -173,30 +175,26 @@ void read_material(const JsonReader& m, MaterialSpec& mat) {
 
 // The "extensions" section: name -> false switches an extension off (its keys stay valid).
 void read_extensions(const JsonReader& r, Scene& s) {
-  for (const char* name : kExtensionNames)
+  for (const std::string& name : extension_names())
     if (!r.boolean(name, true)) s.extensions_off.push_back(name);
   r.reject_unknown_keys();
 }
 
-// Applies the switches: the model is then the one without the extension.
-void switch_off_extensions(Scene& s) {
-  for (const std::string& name : s.extensions_off) {
-    if (name == "friction") {
-      s.friction_keys = false;
-      for (PlaneSpec& p : s.planes) p.friction = 0;
-    } else if (name == "heterogeneous_stiffness") {
-      s.material.regions.clear();
-      s.material.stiffness_gradient.setZero();
-      s.material.stiffness_gradient_key = false;
-    } else if (name == "second_plane") {
-      if (s.planes.size() > 1) s.planes.resize(1);
-    } else if (name == "nonlinear_material") {
-      s.material.neo_hookean = false;
-    } else if (name == "air_drag") {
-      s.air_drag = 0;
-      s.air_drag_key = false;
+// The "plausible" section: parameter name -> [lower, upper] (docs/scene-format.md).
+void read_plausible(const nlohmann::json& section, const JsonReader& r, Scene& s) {
+  const JsonReader p = r.child("plausible");
+  for (const auto& item : section.items()) {
+    const std::string& name = item.key();
+    const std::vector<double> range = p.numbers(name);
+    p.require(range.size() == 2 && range[0] < range[1], name, "must be [lower, upper] with lower < upper");
+    try {
+      parameter_row(name);
+    } catch (const InputError&) {
+      p.fail(name, "is not a parameter name (see docs/scene-format.md, Parameters)");
     }
+    s.plausible[name] = {range[0], range[1]};
   }
+  p.reject_unknown_keys();
 }
 
 void read_grid(const JsonReader& r, Scene& s) {
@@ -221,9 +219,6 @@ void read_grid(const JsonReader& r, Scene& s) {
 }
 
 }  // namespace
-
-const char* const kExtensionNames[5] = {"friction", "heterogeneous_stiffness", "second_plane", "nonlinear_material",
-                                        "air_drag"};
 
 bool MaterialRegion::contains(const Eigen::Vector3d& x) const {
   if (kind == Kind::HalfSpace) return normal.dot(x) >= offset;
@@ -307,6 +302,7 @@ Scene parse_scene(const nlohmann::json& config, const std::string& file) {
     v.reject_unknown_keys();
   }
   if (r.has("extensions")) read_extensions(r.child("extensions"), s);
+  if (r.has("plausible")) read_plausible(config.at("plausible"), r, s);
   switch_off_extensions(s);
   for (const char* section : {"observation", "units", "name", "description"})
     if (r.has(section)) s.extra[section] = config.at(section);

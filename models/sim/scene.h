@@ -3,6 +3,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -42,10 +43,6 @@ struct MaterialSpec {
   bool stiffness_gradient_key = false;  // the scene gives material.stiffness_gradient
   bool neo_hookean = false;  // material.model: "corotated_linear" (the paper's) or "neo_hookean"
 };
-
-// The model extensions by name (ops named in docs/scene-format.md); each can be switched off
-// in the scene's "extensions" section without removing its keys.
-extern const char* const kExtensionNames[5];
 
 struct PlaneSpec {
   Eigen::Vector3d normal{0, 1, 0};  // unit
@@ -105,6 +102,9 @@ struct Scene {
   // a friction key, or a command fits or sweeps a friction coefficient; see models_friction.
   bool friction_keys = false;
   std::vector<std::string> extensions_off;  // switched off in the scene's "extensions" section
+  // The scene's "plausible" section: a parameter's plausible range, widened or narrowed from
+  // the default (models/sim/extensions.h: plausible_range).
+  std::map<std::string, std::pair<double, double>> plausible;
   std::vector<DirichletBox> dirichlet;
   TimeSpec time;
   SolverSpec solver;

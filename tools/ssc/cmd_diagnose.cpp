@@ -67,9 +67,7 @@ Command register_diagnose(CLI::App& app) {
   sub->add_option("--out", o->out, "Output folder (replaced atomically)")->required();
   sub->add_option("--fit", o->d.fit, "The base model's parameters to fit, comma-separated (default youngs_modulus)")
       ->delimiter(',');
-  sub->add_option("--candidates", o->d.candidates,
-                  "Extensions to try, comma-separated (default: friction, heterogeneous_stiffness, second_plane, "
-                  "nonlinear_material, air_drag)")
+  sub->add_option("--candidates", o->d.candidates, "Extensions to try, comma-separated (default: " + extension_list() + ")")
       ->delimiter(',');
   sub->add_option("--starts", o->d.starts, "Starts per fit")->check(CLI::Range(1, 1000));
   sub->add_option("--iterations", o->d.iterations, "Iterations per start")->check(CLI::Range(1, 100000));

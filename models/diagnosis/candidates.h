@@ -1,0 +1,43 @@
+// The diagnosis's models, built from the extension table (models/sim/extensions.h): each
+// candidate's spec, the placebos that stand for no missing effect, and the proposals the data
+// make for the candidates that need one (a plane where the fitted body goes while the
+// observations show it does not; a material interface across the fitted stiffness gradient).
+#pragma once
+#include <string>
+#include <vector>
+
+#include "models/diagnosis/model_fit.h"
+#include "models/sim/extensions.h"
+
+namespace ssc {
+
+// The largest extent of the rest body (m).
+double body_extent(const SimGrid& grid);
+// "ground.friction" for plane 0, "ground.planes[k].friction" for the others.
+std::string plane_parameter(int k, const std::string& key);
+// Parameters after expansion (material.stiffness_gradient: 3) a candidate fits in this scene.
+int extra_parameter_count(const ExtensionRow& row, const Scene& scene);
+
+// The spec of an OffValue or ModelSwitch candidate.
+ModelSpec candidate_spec(const ExtensionRow& row, const Scene& scene, double extent);
+
+// Placebos: the base plus k parameters that stand for no missing effect (initial velocity
+// components the base leaves alone, those the body's motion does not use first), one for
+// each count in `counts` (1..3).
+std::vector<std::string> placebo_parameters(const Scene& scene, const std::vector<std::string>& base_fit);
+ModelSpec placebo_spec(const Scene& scene, const std::vector<std::string>& spare, int k);
+
+// Up to `most` planes the base fit asks for: directions (8 horizontal ones, up and down)
+// along which the fitted body went, in some held-in frame, beyond every observed point by
+// more than half a cell, counted from the same gap in the first observed frame (the part of
+// the body no camera sees), at least 60 degrees apart, furthest first. Each spec adds the
+// plane (facing back, where the observed body's extreme was) and fits its height.
+std::vector<ModelSpec> plane_proposals(const FittedModel& base, int heldin, int most);
+
+// The two-material body the stiffness gradient's fit asks for: a plane through the rest
+// body's centre across the gradient, the side the gradient points to its own Young's modulus
+// (material.regions[0]), started at the gradient's ratio. Empty `name` when the gradient fit
+// gives no direction.
+ModelSpec interface_proposal(const FittedModel& gradient_fit, const Problem& base, double extent);
+
+}  // namespace ssc

@@ -1,0 +1,206 @@
+// Fitting the diagnosis's models (see model_fit.h).
+#include "models/diagnosis/model_fit.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <random>
+
+#include "models/cost/surface_constraint.h"
+#include "models/optim/reconstruction.h"
+#include "models/sim/extensions.h"
+#include "models/sim/parameters.h"
+
+namespace ssc {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The value a parameter keeps in a model that does not fit it: the spec's fixed value, its
+// extension's off value, or the scene's.
+double held_value(const ModelSpec& spec, const std::string& name, const PhysicalParameters& scene_values) {
+  if (const auto f = spec.fixed.find(name); f != spec.fixed.end()) return f->second;
+  const ExtensionRow* row = find_extension(owner(name));
+  if (row && row->fit == ExtensionRow::Fit::OffValue) return row->off_value;
+  return get_parameter(scene_values, name);
+}
+
+void add_unique(std::vector<std::string>& list, const std::string& name) {
+  if (std::find(list.begin(), list.end(), name) == list.end()) list.push_back(name);
+}
+
+// The base parameters' starts, as reconstruct draws them for the base model alone.
+std::vector<std::map<std::string, double>> draw_base_starts(const Problem& shared, const DiagnosisContext& c) {
+  const DiagnosisOptions& o = c.options;
+  const PhysicalParameters nominal = PhysicalParameters::from_scene(shared.scene);
+  const std::vector<std::string> base_names = expand_parameter_names(o.fit, nominal);
+  std::vector<ParameterAxis> axes;
+  Eigen::VectorXd base_nominal(Eigen::Index(base_names.size()));
+  for (size_t i = 0; i < base_names.size(); ++i) {
+    base_nominal[Eigen::Index(i)] = get_parameter(nominal, base_names[i]);
+    axes.push_back(default_axis(base_names[i], base_nominal[Eigen::Index(i)]));
+  }
+  ReconstructionOptions sampling;
+  sampling.starts = o.starts;
+  sampling.seed = o.seed;
+  sampling.start_ranges = scene_start_ranges(shared.scene);
+  std::vector<std::map<std::string, double>> starts;
+  for (const Eigen::VectorXd& x : sample_starts(ParameterSpace(axes), base_nominal, sampling)) {
+    std::map<std::string, double> v;
+    for (size_t i = 0; i < base_names.size(); ++i) v[base_names[i]] = x[Eigen::Index(i)];
+    starts.push_back(v);
+  }
+  return starts;
+}
+
+}  // namespace
+
+bool stopped_converged(const std::string& stop_reason) {
+  return stop_reason == "gradient below tolerance" || stop_reason == "cost change below tolerance" ||
+         stop_reason.rfind("converged", 0) == 0;
+}
+
+PhysicalParameters with_values(const Scene& scene, const std::vector<std::string>& names, const Eigen::VectorXd& v) {
+  PhysicalParameters p = PhysicalParameters::from_scene(scene);
+  for (size_t i = 0; i < names.size(); ++i) set_parameter(p, names[i], v[Eigen::Index(i)]);
+  return p;
+}
+
+std::map<std::string, double> values_by_name(const FittedModel& m) {
+  std::map<std::string, double> v;
+  for (size_t i = 0; i < m.names.size() && i < size_t(m.values.size()); ++i) v[m.names[i]] = m.values[Eigen::Index(i)];
+  return v;
+}
+
+std::vector<double> per_frame_costs(const Problem& problem, const PhysicalParameters& p, const std::string& device) {
+  Simulation sim(problem.scene, problem.grid, 1, true);
+  if (device == "cuda") sim.use_gpu();
+  sim.set_parameters(0, p);
+  const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
+  GradientOptions o;
+  o.gradient = false;
+  const CostGradient r = evaluate_cost_gradient(sim, cost, problem.frames, o)[0];
+  std::vector<double> out;
+  for (const FrameCost& f : r.frames) out.push_back(f.cost);
+  return out;
+}
+
+Problem held_in(const Problem& p, int frames) {
+  Problem q = p;
+  q.frames.resize(size_t(frames));
+  return q;
+}
+
+std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const DiagnosisContext& c,
+                                      std::vector<std::map<std::string, double>>& base_starts,
+                                      Problem* shared_problem) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const DiagnosisOptions& o = c.options;
+  std::vector<std::string> all_overrides = c.overrides, fit = o.fit;
+  for (const ModelSpec& spec : specs) {
+    all_overrides.insert(all_overrides.end(), spec.overrides.begin(), spec.overrides.end());
+    for (const std::string& e : spec.extra)  // the placebos share components
+      if (spec.extra_in_load) add_unique(fit, e);
+  }
+  Problem shared = load_problem(c.scene_path, all_overrides, c.observations, c.phi_max, fit);
+  for (const ModelSpec& spec : specs) {
+    if (spec.adjust) spec.adjust(shared);
+    for (const std::string& e : spec.extra) add_unique(fit, e);
+    for (const auto& [name, value] : spec.fixed) add_unique(fit, name);
+  }
+  if (base_starts.empty()) base_starts = draw_base_starts(shared, c);
+  const PhysicalParameters nominal = PhysicalParameters::from_scene(shared.scene);
+  const std::vector<std::string> names = expand_parameter_names(fit, nominal);
+  auto index_of = [&](const std::string& name) {
+    return int(std::find(names.begin(), names.end(), name) - names.begin());
+  };
+
+  ReconstructionOptions ro;
+  ro.fit = fit;
+  ro.optimizer = o.optimizer;
+  ro.optimizer_options.max_iterations = o.iterations;
+  ro.seed = o.seed;
+  ro.device = o.device;
+  for (const std::string& n : names)
+    if (const auto range = plausible_range(shared.scene, n, c.extent); std::isfinite(range.second))
+      ro.bounds[n] = range;
+  for (const ModelSpec& spec : specs) ro.typical_magnitudes.insert(spec.magnitudes.begin(), spec.magnitudes.end());
+  std::vector<std::vector<std::string>> model_names;
+  for (const ModelSpec& spec : specs) {
+    std::vector<std::string> own = o.fit;
+    own.insert(own.end(), spec.extra.begin(), spec.extra.end());
+    model_names.push_back(expand_parameter_names(own, nominal));
+    std::vector<int> free;
+    for (const std::string& n : model_names.back()) free.push_back(index_of(n));
+    std::mt19937_64 rng(o.seed * 7919 + std::hash<std::string>{}(spec.name));
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    for (const std::map<std::string, double>& base_values : base_starts) {
+      Eigen::VectorXd x(Eigen::Index(names.size()));
+      for (size_t i = 0; i < names.size(); ++i) x[Eigen::Index(i)] = held_value(spec, names[i], nominal);
+      for (const std::string& n : model_names.back()) {
+        double& xi = x[index_of(n)];
+        if (const auto b = base_values.find(n); b != base_values.end()) {
+          xi = b->second;
+          continue;
+        }
+        const auto r = spec.ranges.at(n);
+        const double u = unit(rng);
+        xi = spec.log_range ? r.first * std::pow(r.second / r.first, u) : r.first + u * (r.second - r.first);
+      }
+      ro.initial_values.push_back(x);
+      ro.start_free.push_back(free);
+    }
+  }
+  const ReconstructionResult r = reconstruct(held_in(shared, c.heldin), ro);
+  const double batch_seconds = seconds_since(t0);
+
+  std::vector<FittedModel> models;
+  const size_t S = base_starts.size();
+  for (size_t m = 0; m < specs.size(); ++m) {
+    const ModelSpec& spec = specs[m];
+    FittedModel fm;
+    fm.name = spec.name;
+    fm.extra = spec.extra;
+    fm.names = model_names[m];
+    std::vector<std::string> own_overrides = c.overrides, own_fit = o.fit;
+    own_overrides.insert(own_overrides.end(), spec.overrides.begin(), spec.overrides.end());
+    if (spec.extra_in_load) own_fit.insert(own_fit.end(), spec.extra.begin(), spec.extra.end());
+    fm.problem = load_problem(c.scene_path, own_overrides, c.observations, c.phi_max, own_fit);
+    if (spec.adjust) spec.adjust(fm.problem);
+    PhysicalParameters held = PhysicalParameters::from_scene(fm.problem.scene);
+    for (const auto& [name, value] : spec.fixed) set_parameter(held, name, value);
+    int best = -1;
+    for (size_t s = m * S; s < (m + 1) * S; ++s)
+      if (!r.starts[s].failed && r.starts[s].final.size() > 0 &&
+          (best < 0 || r.starts[s].final_cost < r.starts[size_t(best)].final_cost))
+        best = int(s);
+    fm.seconds = batch_seconds;
+    if (best < 0) {
+      fm.failed = true;
+      fm.failure = r.starts[m * S].failure.empty() ? "no start" : r.starts[m * S].failure;
+      models.push_back(std::move(fm));
+      continue;
+    }
+    const StartRecord& start = r.starts[size_t(best)];
+    fm.values.resize(Eigen::Index(fm.names.size()));
+    for (size_t i = 0; i < fm.names.size(); ++i) fm.values[Eigen::Index(i)] = start.final[index_of(fm.names[i])];
+    fm.stop_reason = start.stop_reason;
+    for (size_t s = m * S; s < (m + 1) * S; ++s) fm.converged_starts += stopped_converged(r.starts[s].stop_reason);
+    fm.starts = int(S);
+    if (start.stop_reason == "iteration limit")
+      fm.note = fmt::format("the fit stopped at the iteration limit ({} iterations)", o.iterations);
+    for (size_t i = 0; i < fm.names.size(); ++i) set_parameter(held, fm.names[i], fm.values[Eigen::Index(i)]);
+    fm.frame_costs = per_frame_costs(fm.problem, held, o.device);
+    for (size_t f = 0; f < fm.frame_costs.size(); ++f)
+      (int(f) < c.heldin ? fm.heldin_cost : fm.heldout_cost) += fm.frame_costs[f];
+    models.push_back(std::move(fm));
+  }
+  if (shared_problem) *shared_problem = std::move(shared);
+  return models;
+}
+
+}  // namespace ssc
