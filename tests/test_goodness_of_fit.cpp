@@ -7,7 +7,8 @@
 //    seen at an angle shows less of its depth noise), which at most doubles the error for the
 //    spread of a sphere; 5/sqrt(N) is then at least 3.5 such standard deviations;
 //  - the same points unprojected with focal lengths 5 % too large (a wrong cameras.json) are
-//    well above the noise, and the warning fires; wrong in one frame only, that frame is named;
+//    well above the noise, and the warning fires; wrong in one frame only, the fit is at the
+//    noise overall, but that frame is named and the warning fires too;
 //  - through the command line: `ssc residuals` and `ssc reconstruct` write the goodness of fit,
 //    print its line, and print the warning on stderr for the wrong focal lengths.
 #include <gtest/gtest.h>
@@ -77,7 +78,9 @@ PhysicalParameters truth() { return PhysicalParameters::from_scene(sphere_proble
 
 void print(const char* what, const GoodnessOfFit& g) {
   std::printf("%s: %s\n", what, goodness_line(g).c_str());
-  for (const FitGroup& f : g.above) std::printf("  above: %s %s ratio %.2f\n", f.kind.c_str(), f.name.c_str(), f.ratio);
+  if (g.noise_source == "estimate")
+    std::printf("  estimated depth sigma %.3f mm from %d neighbour pairs\n", 1e3 * g.estimated_sigma_m, g.estimate_pairs);
+  for (const FitGroup& f : g.above) std::printf("  above the noise in %s: ratio %.2f\n", f.name.c_str(), f.ratio);
 }
 
 TEST(GoodnessOfFit, AtTheTruthTheResidualIsTheModelledNoise) {
@@ -109,9 +112,12 @@ TEST(GoodnessOfFit, WithoutAModelTheNoiseIsEstimatedFromNeighbouringPixels) {
   ASSERT_EQ(g.noise_source, "estimate");
   ASSERT_GT(g.estimate_pairs, 1000);
   // The renderer's noise is along the ray; the estimate is of the z depth, shorter by the
-  // ray's axial cosine (0.94 or more within a 40 degree field of view).
-  EXPECT_NEAR(g.estimated_sigma_m, 0.97 * kNoise, 5 / std::sqrt(double(g.estimate_pairs)) * kNoise + 0.03 * kNoise);
-  EXPECT_NEAR(g.overall.ratio, 1.0, 5 / std::sqrt(double(g.overall.matched)) + 5 / std::sqrt(double(g.estimate_pairs)));
+  // ray's axial cosine, 0.9 to 1 within a 40 degree field of view (measured: 2.85 mm). The
+  // MAD's sampling error is about 1.2/sqrt(pairs) (its efficiency is 37 %).
+  const double sampling = 5 / std::sqrt(double(g.estimate_pairs));
+  EXPECT_GT(g.estimated_sigma_m, (0.9 - sampling) * kNoise);
+  EXPECT_LT(g.estimated_sigma_m, (1.0 + sampling) * kNoise);
+  EXPECT_NEAR(g.overall.ratio, 1.0, 5 / std::sqrt(double(g.overall.matched)) + sampling);
   EXPECT_FALSE(g.above_noise);
   const json j = goodness_json(g);
   EXPECT_EQ(j["noise"]["source"], "estimate");
@@ -124,7 +130,7 @@ TEST(GoodnessOfFit, WrongFocalLengthsAreWellAboveTheNoiseAndWarn) {
     if (!model) p.observations.depth_noise.clear();
     const GoodnessOfFit g = goodness_of_fit(p, truth());
     print(model ? "focal lengths +5 %, model" : "focal lengths +5 %, estimate", g);
-    EXPECT_GT(g.overall.ratio, 2 * kAboveNoiseRatio);
+    EXPECT_GT(g.overall.ratio, 2.0);  // the misfit's RMS is sqrt(3) times the noise or more
     EXPECT_TRUE(g.above_noise);
     EXPECT_EQ(g.verdict.rfind("above the noise (", 0), 0u) << g.verdict;
     for (const char* cause : {"intrinsics", "depth_scale", "segmentation", "ssc diagnose"})
@@ -149,6 +155,12 @@ TEST(GoodnessOfFit, AFrameThatIsWrongAloneIsNamed) {
   EXPECT_EQ(g.above[0].name, "frame 3");
   for (const FitGroup& f : g.above) EXPECT_FALSE(f.kind == "frame" && f.name != "frame 3") << f.name;
   EXPECT_GT(g.frames[wrong].ratio, kAboveNoiseRatio * g.overall.ratio);
+  // Overall the fit is at the noise, yet the frame is above it: that is worth the warning.
+  EXPECT_LE(g.overall.ratio, kAboveNoiseRatio);
+  EXPECT_TRUE(g.above_noise);
+  EXPECT_EQ(g.verdict.rfind("above the noise in frame 3 (", 0), 0u) << g.verdict;
+  EXPECT_NE(g.warning.find("at the depth noise overall"), std::string::npos) << g.warning;
+  EXPECT_NE(g.warning.find("frame 3"), std::string::npos) << g.warning;
 }
 
 class GoodnessOfFitCli : public CliTestFolder {
@@ -191,7 +203,7 @@ TEST_F(GoodnessOfFitCli, ResidualsAndReconstructReportItAndWarnOnWrongIntrinsics
   std::printf("%s%s", out.c_str(), err.c_str());
   const json bad = read_json(dir_ / "rw" / "residuals.json")["goodness_of_fit"];
   EXPECT_TRUE(bad["above_noise"].get<bool>());
-  EXPECT_GT(bad["ratio"].get<double>(), 2 * kAboveNoiseRatio);
+  EXPECT_GT(bad["ratio"].get<double>(), 2.0);
   EXPECT_NE(err.find("ssc: warning: the fit's residual is"), std::string::npos) << err;
   EXPECT_NE(read_text(dir_ / "rw" / "report.html").find("times the depth noise"), std::string::npos);
 

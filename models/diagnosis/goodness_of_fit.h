@@ -54,9 +54,12 @@ struct GoodnessOfFit {
   std::vector<double> frame_times_s;
   std::vector<FitGroup> groups;  // by phase, region and direction, as residual_summary groups them
   std::vector<FitGroup> above;   // the frames and groups where structure above the noise remains
+  // Above the noise overall (ratio above kAboveNoiseRatio) or in some frames or groups (`above`).
   bool above_noise = false;
-  std::string verdict;  // "at the noise", "above the noise (2.3 times)", "too few matched points", "noise unknown"
-  std::string warning;  // the message when above_noise, naming the likely causes
+  // "at the noise", "below the noise (0.55 times)", "above the noise (2.3 times)", "above the
+  // noise in frame 12 (2.6 times)", "too few matched points", "noise unknown (why)"
+  std::string verdict;
+  std::string warning;  // the message when above_noise, naming where and the likely causes
 };
 
 // Simulates the problem with `params` (on the GPU for device "cuda") and judges the fit.
