@@ -32,18 +32,33 @@ json sphere_scene() {
   json j;
   j["object"] = {{"primitive", "sphere"}, {"radius", 0.25}, {"position", {0.0, 0.3, 0.0}}};
   j["grid"] = {{"cell_size", 0.08}, {"band_width", 2}};
-  j["material"] = {{"youngs_modulus", 2e4}, {"poisson_ratio", 0.3}, {"density", 100}, {"mass_damping", 0.1},
+  j["material"] = {{"youngs_modulus", 2e4},
+                   {"poisson_ratio", 0.3},
+                   {"density", 100},
+                   {"mass_damping", 0.1},
                    {"stiffness_damping", 0.01}};
   j["initial"] = {{"linear_velocity", {0.0, -2.0, 0.0}}};
   j["ground"] = {{"height", 0.0}, {"normal", {0.0, 1.0, 0.0}}, {"stiffness", 3e5}, {"softmin_alpha", 100}};
   j["time"] = {{"dt", 0.01}, {"steps", 12}, {"theta", 0.6}};
   json cams = json::array();
-  cams.push_back({{"name", "a"}, {"width", 32}, {"height", 32}, {"fov_deg", 40}, {"eye", {1.2, 0.8, 1.0}},
-                  {"target", {0, 0.2, 0}}, {"min_depth", 0.2}, {"max_depth", 5.0}});
-  cams.push_back({{"name", "b"}, {"width", 32}, {"height", 32}, {"fov_deg", 40}, {"eye", {-1.3, 0.6, -0.6}},
-                  {"target", {0, 0.2, 0}}, {"min_depth", 0.2}, {"max_depth", 5.0}});
-  j["observation"] = {{"every", 2}, {"noise", kNoise}, {"seed", 5}, {"depth_scale", 1e-4}, {"phi_max", 0.1},
-                      {"cameras", cams}};
+  cams.push_back({{"name", "a"},
+                  {"width", 32},
+                  {"height", 32},
+                  {"fov_deg", 40},
+                  {"eye", {1.2, 0.8, 1.0}},
+                  {"target", {0, 0.2, 0}},
+                  {"min_depth", 0.2},
+                  {"max_depth", 5.0}});
+  cams.push_back({{"name", "b"},
+                  {"width", 32},
+                  {"height", 32},
+                  {"fov_deg", 40},
+                  {"eye", {-1.3, 0.6, -0.6}},
+                  {"target", {0, 0.2, 0}},
+                  {"min_depth", 0.2},
+                  {"max_depth", 5.0}});
+  j["observation"] = {{"every", 2},          {"noise", kNoise}, {"seed", 5},
+                      {"depth_scale", 1e-4}, {"phi_max", 0.1},  {"cameras", cams}};
   return j;
 }
 
@@ -79,7 +94,8 @@ PhysicalParameters truth() { return PhysicalParameters::from_scene(sphere_proble
 void print(const char* what, const GoodnessOfFit& g) {
   std::printf("%s: %s\n", what, goodness_line(g).c_str());
   if (g.noise_source == "estimate")
-    std::printf("  estimated depth sigma %.3f mm from %d neighbour pairs\n", 1e3 * g.estimated_sigma_m, g.estimate_pairs);
+    std::printf("  estimated depth sigma %.3f mm from %d neighbour pairs\n", 1e3 * g.estimated_sigma_m,
+                g.estimate_pairs);
   for (const FitGroup& f : g.above) std::printf("  above the noise in %s: ratio %.2f\n", f.name.c_str(), f.ratio);
 }
 
@@ -183,10 +199,10 @@ TEST_F(GoodnessOfFitCli, ResidualsAndReconstructReportItAndWarnOnWrongIntrinsics
   for (json& c : edited["cameras"]) c["fx"] = 1.05 * c["fx"].get<double>(), c["fy"] = 1.05 * c["fy"].get<double>();
   write("wrong/cameras.json", edited);
 
-  ASSERT_EQ(run("residuals '" + scene + "' --observations '" + obs + "' --out '" + (dir_ / "r").string() +
-                    "' --device cpu",
-                &out, &err),
-            0)
+  ASSERT_EQ(
+      run("residuals '" + scene + "' --observations '" + obs + "' --out '" + (dir_ / "r").string() + "' --device cpu",
+          &out, &err),
+      0)
       << err;
   std::printf("%s", out.c_str());
   const json good = read_json(dir_ / "r" / "residuals.json")["goodness_of_fit"];
@@ -207,8 +223,10 @@ TEST_F(GoodnessOfFitCli, ResidualsAndReconstructReportItAndWarnOnWrongIntrinsics
   EXPECT_NE(err.find("ssc: warning: the fit's residual is"), std::string::npos) << err;
   EXPECT_NE(read_text(dir_ / "rw" / "report.html").find("times the depth noise"), std::string::npos);
 
-  ASSERT_EQ(run("reconstruct '" + scene + "' --observations '" + wrong + "' --fit youngs_modulus --starts 1 "
-                "--iterations 2 --out '" + (dir_ / "fit").string() + "' --device cpu",
+  ASSERT_EQ(run("reconstruct '" + scene + "' --observations '" + wrong +
+                    "' --fit youngs_modulus --starts 1 "
+                    "--iterations 2 --out '" +
+                    (dir_ / "fit").string() + "' --device cpu",
                 &out, &err),
             0)
       << err;

@@ -59,7 +59,8 @@ double estimate_depth_sigma(const Problem& problem, const Residuals& r, const st
   std::vector<long> at;
   for (size_t begin = 0, end; begin < r.points.size(); begin = end) {  // one frame and camera at a time
     const ResidualPoint& first = r.points[begin];
-    for (end = begin; end < r.points.size() && r.points[end].frame == first.frame && r.points[end].camera == first.camera;)
+    for (end = begin;
+         end < r.points.size() && r.points[end].frame == first.frame && r.points[end].camera == first.camera;)
       ++end;
     if (first.pixel < 0 || size_t(first.frame) >= obs.frames.size() || size_t(first.camera) >= obs.cameras.size())
       continue;
@@ -121,7 +122,10 @@ std::string list_names(const std::vector<FitGroup>& groups) {
   std::string s;
   const size_t shown = std::min<size_t>(groups.size(), 4);
   for (size_t i = 0; i < shown; ++i)
-    s += fmt::format("{}{} ({:.1f} times)", i == 0 ? "" : i + 1 == shown && shown == groups.size() ? " and " : ", ",
+    s += fmt::format("{}{} ({:.1f} times)",
+                     i == 0                                     ? ""
+                     : i + 1 == shown && shown == groups.size() ? " and "
+                                                                : ", ",
                      group_label(groups[i]), groups[i].ratio);
   if (groups.size() > shown) s += fmt::format(" and {} more", groups.size() - shown);
   return s;
@@ -129,7 +133,8 @@ std::string list_names(const std::vector<FitGroup>& groups) {
 
 std::string noise_description(const GoodnessOfFit& g) {
   if (g.noise_source == "cameras.json") return "from cameras.json's depth_noise";
-  return fmt::format("estimated from the residuals of neighbouring pixels: depth sigma {:.3g} mm", 1e3 * g.estimated_sigma_m);
+  return fmt::format("estimated from the residuals of neighbouring pixels: depth sigma {:.3g} mm",
+                     1e3 * g.estimated_sigma_m);
 }
 
 void judge(GoodnessOfFit& g) {
@@ -146,19 +151,21 @@ void judge(GoodnessOfFit& g) {
     if (stands_out(f)) g.above.push_back(f);
   for (const FitGroup& f : g.groups)
     if (stands_out(f)) g.above.push_back(f);
-  std::stable_sort(g.above.begin(), g.above.end(), [](const FitGroup& a, const FitGroup& b) { return a.ratio > b.ratio; });
+  std::stable_sort(g.above.begin(), g.above.end(),
+                   [](const FitGroup& a, const FitGroup& b) { return a.ratio > b.ratio; });
   // Above the noise overall, or in a part of the data only (a missed effect may show in a few frames).
   const bool overall = all.ratio > kAboveNoiseRatio;
   g.above_noise = overall || !g.above.empty();
   if (!g.above_noise) {
-    g.verdict = all.ratio < 1 / kAboveNoiseRatio ? fmt::format("below the noise ({:.2f} times)", all.ratio) : "at the noise";
+    g.verdict =
+        all.ratio < 1 / kAboveNoiseRatio ? fmt::format("below the noise ({:.2f} times)", all.ratio) : "at the noise";
     return;
   }
   g.verdict = overall ? fmt::format("above the noise ({:.1f} times)", all.ratio)
                       : fmt::format("above the noise in {} ({:.1f} times)", group_label(g.above[0]), g.above[0].ratio);
-  const std::string measured = fmt::format("RMS {:.3g} mm over {} matched points against {:.3g} mm, {}; above {} counts as a misfit",
-                                           1e3 * all.rms_m, all.matched, 1e3 * all.noise_m, noise_description(g),
-                                           kAboveNoiseRatio);
+  const std::string measured =
+      fmt::format("RMS {:.3g} mm over {} matched points against {:.3g} mm, {}; above {} counts as a misfit",
+                  1e3 * all.rms_m, all.matched, 1e3 * all.noise_m, noise_description(g), kAboveNoiseRatio);
   g.warning = fmt::format(
       "{}: the model leaves structure the noise does not explain{}{}. Likely causes: the cameras' intrinsics (fx, fy, "
       "cx, cy) or depth_scale in cameras.json, segmentation (observed points that are not on the body), or a physical "
@@ -189,9 +196,10 @@ GoodnessOfFit goodness_of_fit(const Problem& problem, const Residuals& r) {
     g.estimated_sigma_m = estimate_depth_sigma(problem, r, geo, &g.estimate_pairs);
     if (std::isnan(g.estimated_sigma_m)) {
       g.noise_source = "unknown";
-      g.verdict = fmt::format("noise unknown (cameras.json gives no depth_noise, and {} pairs of matched neighbouring "
-                              "pixels are too few to estimate it)",
-                              g.estimate_pairs);
+      g.verdict = fmt::format(
+          "noise unknown (cameras.json gives no depth_noise, and {} pairs of matched neighbouring "
+          "pixels are too few to estimate it)",
+          g.estimate_pairs);
     } else {
       g.estimated_sigma_m = std::max(g.estimated_sigma_m, g.quantisation_m);
     }
@@ -227,14 +235,17 @@ GoodnessOfFit goodness_of_fit(const Problem& problem, const Residuals& r) {
   g.overall = group_from_summary("all", "all", summary["all"], all);
   for (size_t f = 0; f < r.frames.size(); ++f) {
     const FrameResiduals& fr = r.frames[f];
-    g.frames.push_back(make_group("frame", fmt::format("frame {}", fr.frame), fr.points, fr.matched, fr.rms, by_frame[f]));
+    g.frames.push_back(
+        make_group("frame", fmt::format("frame {}", fr.frame), fr.points, fr.matched, fr.rms, by_frame[f]));
     g.frame_times_s.push_back(fr.time);
   }
-  for (const auto& [name, s] : summary["by_phase"].items()) g.groups.push_back(group_from_summary("phase", name, s, by_phase[name]));
+  for (const auto& [name, s] : summary["by_phase"].items())
+    g.groups.push_back(group_from_summary("phase", name, s, by_phase[name]));
   for (const auto& [name, s] : summary["by_region"].items())
     g.groups.push_back(group_from_summary("region", name, s, by_region[name]));
   const nlohmann::json& dir = summary["by_direction"];
-  g.groups.push_back(make_group("direction", "normal", g.overall.points, g.overall.matched, dir["normal_rms_m"], normal));
+  g.groups.push_back(
+      make_group("direction", "normal", g.overall.points, g.overall.matched, dir["normal_rms_m"], normal));
   g.groups.push_back(
       make_group("direction", "tangential", g.overall.points, g.overall.matched, dir["tangential_rms_m"], tangential));
   judge(g);

@@ -47,8 +47,8 @@ struct FitGroup {
 struct GoodnessOfFit {
   std::string noise_source;  // "cameras.json", "estimate" or "unknown" (no pixels to place the points)
   double estimated_sigma_m = std::numeric_limits<double>::quiet_NaN();  // "estimate": sigma of the z depth
-  int estimate_pairs = 0;    // neighbouring pixel pairs the estimate used
-  double quantisation_m = 0;  // depth_scale / sqrt(12)
+  int estimate_pairs = 0;                                               // neighbouring pixel pairs the estimate used
+  double quantisation_m = 0;                                            // depth_scale / sqrt(12)
   FitGroup overall;
   std::vector<FitGroup> frames;  // one per observed frame (time: frame_times_s)
   std::vector<double> frame_times_s;
