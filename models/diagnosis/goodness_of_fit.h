@@ -45,7 +45,7 @@ struct FitGroup {
 };
 
 struct GoodnessOfFit {
-  std::string noise_source;  // "cameras.json", "estimate" or "unknown" (no pixels to place the points)
+  std::string noise_source;  // "cameras.json", "estimate" or "unknown" (the verdict says why)
   double estimated_sigma_m = std::numeric_limits<double>::quiet_NaN();  // "estimate": sigma of the z depth
   int estimate_pairs = 0;                                               // neighbouring pixel pairs the estimate used
   double quantisation_m = 0;                                            // depth_scale / sqrt(12)
