@@ -603,6 +603,58 @@ TEST(ObservationTest, ReaderReportsEveryProblemWithItsPath) {
   expect_input_error([&] { read_observations(tmp / "nothing"); }, {tmp / "nothing", "does not exist"});
 }
 
+TEST(ObservationTest, DepthNoiseModelIsOptionalReadsBackAndIsChecked) {
+  TempDir tmp("noise");
+  ObservationSet set = small_set();
+  write_observations(tmp / "none", set);
+  EXPECT_TRUE(read_observations(tmp / "none").depth_noise.empty());
+  EXPECT_EQ(camera_depth_noise(read_observations(tmp / "none"), 0), nullptr);
+  // One model for both cameras is written once, at the top level.
+  set.depth_noise.assign(2, DepthNoise{0.0012, 0.0019, false});
+  write_observations(tmp / "shared", set);
+  const nlohmann::json shared = read_json(tmp / "shared/cameras.json");
+  EXPECT_EQ(shared["depth_noise"]["sigma0_m"], 0.0012);
+  EXPECT_EQ(shared["depth_noise"]["along"], "depth");
+  EXPECT_FALSE(shared["cameras"][0].contains("depth_noise"));
+  const ObservationSet back = read_observations(tmp / "shared");
+  ASSERT_EQ(back.depth_noise.size(), 2u);
+  EXPECT_TRUE(*back.depth_noise[1] == *set.depth_noise[1]);
+  EXPECT_DOUBLE_EQ(camera_depth_noise(back, 1)->sigma(2.0), 0.0012 + 0.0019 * 4);
+  // Different models, and one camera without: per camera; a camera's own model wins over the top level's.
+  set.depth_noise[0] = DepthNoise{0.003, 0.0, true};
+  set.depth_noise[1].reset();
+  write_observations(tmp / "own", set);
+  ObservationSet own = read_observations(tmp / "own");
+  ASSERT_EQ(own.depth_noise.size(), 2u);
+  EXPECT_TRUE(own.depth_noise[0] && own.depth_noise[0]->along_ray && own.depth_noise[0]->sigma0_m == 0.003);
+  EXPECT_FALSE(own.depth_noise[1]);
+  nlohmann::json j = read_json(tmp / "own/cameras.json");
+  j["depth_noise"] = {{"sigma0_m", 0.005}};
+  write_json(tmp / "own/cameras.json", j);
+  own = read_observations(tmp / "own");
+  EXPECT_EQ(own.depth_noise[0]->sigma0_m, 0.003);
+  EXPECT_EQ(own.depth_noise[1]->sigma0_m, 0.005);
+  EXPECT_EQ(own.depth_noise[1]->per_m2, 0.0);
+
+  expect_read_error("negative_noise", [](const std::string& d) {
+    auto j = read_json(d + "/cameras.json");
+    j["depth_noise"] = {{"sigma0_m", -0.001}};
+    write_json(d + "/cameras.json", j);
+  }, {"<dir>/cameras.json", "depth_noise", "sigma0_m = -0.001"});
+  expect_read_error("noise_along", [](const std::string& d) {
+    auto j = read_json(d + "/cameras.json");
+    j["cameras"][1]["depth_noise"] = {{"sigma0_m", 0.001}, {"along", "normal"}};
+    write_json(d + "/cameras.json", j);
+  }, {"<dir>/cameras.json", "cameras[1].depth_noise.along", "'normal'"});
+  expect_read_error("noise_type", [](const std::string& d) {
+    auto j = read_json(d + "/cameras.json");
+    j["depth_noise"] = 0.002;
+    write_json(d + "/cameras.json", j);
+  }, {"<dir>/cameras.json", "'depth_noise' must be an object"});
+  set.depth_noise[0] = DepthNoise{std::nan(""), 0.0, false};
+  expect_input_error([&] { write_observations(tmp / "bad", set); }, {"cameras[0]", "depth_noise"});
+}
+
 TEST(ObservationTest, BoundaryDepthsSurviveQuantisation) {
   // Depths at the ends of the range can round past them; the reader allows half a unit.
   TempDir tmp("boundary");

@@ -55,6 +55,10 @@ std::string region_name(int region) {
   return fmt::format("{}x{}y{}z", region & 1 ? '+' : '-', region & 2 ? '+' : '-', region & 4 ? '+' : '-');
 }
 
+std::string phase_name(const FrameResiduals& f) {
+  return f.phase == "contact" ? fmt::format("contact with plane {}", f.plane) : f.phase;
+}
+
 Residuals compute_residuals(const Problem& problem, const PhysicalParameters& params, const std::string& device) {
   Residuals r;
   Simulation sim(problem.scene, problem.grid, 1, true);
@@ -117,6 +121,7 @@ Residuals compute_residuals(const Problem& problem, const PhysicalParameters& pa
       if (p.matched) {
         p.residual = pr[i].phi;
         p.rest = pr[i].rest;
+        p.normal = pr[i].normal;
         const Eigen::Vector3d d = p.residual * pr[i].normal;
         p.normal_part = d.dot(plane_normal);
         p.tangential_part = (d - p.normal_part * plane_normal).norm();
@@ -145,7 +150,7 @@ nlohmann::json residual_summary(const Residuals& r) {
   for (const ResidualPoint& p : r.points) {
     const FrameResiduals& f = r.frames[size_t(p.frame)];
     all.add(p);
-    by_phase[f.phase == "contact" ? fmt::format("contact with plane {}", f.plane) : f.phase].add(p);
+    by_phase[phase_name(f)].add(p);
     if (!p.matched) continue;
     by_region[p.region].add(p);
     normal_sq += p.normal_part * p.normal_part;

@@ -23,6 +23,7 @@ struct ResidualPoint {
   bool matched = false;
   double residual = 0;                                // phi, metres
   Eigen::Vector3d rest = Eigen::Vector3d::Zero();     // where it matched on the rest shape
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();   // the simulated surface's outward unit normal there
   double normal_part = 0, tangential_part = 0;        // of phi * (surface normal), along the plane's normal / across it
   int region = 0;                                     // octant bits: x, y, z above the rest centre of mass
 };
@@ -57,5 +58,8 @@ std::string residuals_csv(const Residuals& r);
 
 // Octant name of a region index, e.g. "+x-y+z".
 std::string region_name(int region);
+
+// The phase a frame is grouped under: "flight", "contact with plane k" or "after contact".
+std::string phase_name(const FrameResiduals& f);
 
 }  // namespace ssc

@@ -160,10 +160,22 @@ void check_cameras(const std::vector<DepthCamera>& cameras, const std::vector<st
   }
 }
 
+void check_depth_noise(const DepthNoise& n, const std::string& where) {
+  if (!(n.sigma0_m >= 0) || !std::isfinite(n.sigma0_m) || !(n.per_m2 >= 0) || !std::isfinite(n.per_m2))
+    throw InputError(fmt::format("{}: depth_noise sigma0_m = {} m and per_m2 = {} 1/m must be finite and >= 0 "
+                                 "(sigma(z) = sigma0_m + per_m2 z^2, metres); {}",
+                                 where, n.sigma0_m, n.per_m2, kDocs));
+}
+
 void validate_with_patterns(const ObservationSet& set, const std::vector<std::string>& patterns,
                             const std::string& where) {
   check_scalars(set.dt, set.depth_scale, set.first_frame_time, set.frame_count, set.cameras.size(), where);
   check_cameras(set.cameras, patterns, set.frame_count, where);
+  if (!set.depth_noise.empty() && set.depth_noise.size() != set.cameras.size())
+    throw InputError(fmt::format("{}: {} depth noise models for {} cameras; give one per camera or none", where,
+                                 set.depth_noise.size(), set.cameras.size()));
+  for (std::size_t i = 0; i < set.depth_noise.size(); ++i)
+    if (set.depth_noise[i]) check_depth_noise(*set.depth_noise[i], fmt::format("{}: cameras[{}]", where, i));
   if (set.frames.size() != std::size_t(set.frame_count))
     throw InputError(fmt::format("{}: frame_count = {} but {} frames are given", where, set.frame_count,
                                  set.frames.size()));
@@ -189,6 +201,11 @@ std::vector<std::string> patterns_or_default(const ObservationSet& set) {
 
 // ---- writing -------------------------------------------------------------------------
 
+nlohmann::ordered_json depth_noise_json(const DepthNoise& n) {
+  return nlohmann::ordered_json{
+      {"sigma0_m", n.sigma0_m}, {"per_m2", n.per_m2}, {"along", n.along_ray ? "ray" : "depth"}};
+}
+
 nlohmann::ordered_json camera_json(const DepthCamera& cam, const std::string& pattern) {
   nlohmann::ordered_json pose = nlohmann::ordered_json::array();
   for (int r = 0; r < 4; ++r)
@@ -201,6 +218,14 @@ nlohmann::ordered_json camera_json(const DepthCamera& cam, const std::string& pa
                                 {"depth_pattern", pattern}};
 }
 
+// One model for every camera: at the top level; otherwise in each camera that has one.
+bool shared_depth_noise(const ObservationSet& set) {
+  if (set.depth_noise.empty() || !set.depth_noise[0]) return false;
+  for (const std::optional<DepthNoise>& n : set.depth_noise)
+    if (!n || !(*n == *set.depth_noise[0])) return false;
+  return true;
+}
+
 void write_header(const fs::path& folder, const ObservationSet& set, const std::vector<std::string>& patterns) {
   nlohmann::ordered_json j;
   j["format"] = kObservationFormat;
@@ -208,8 +233,14 @@ void write_header(const fs::path& folder, const ObservationSet& set, const std::
   j["depth_scale"] = set.depth_scale;
   j["frame_count"] = set.frame_count;
   j["first_frame_time"] = set.first_frame_time;
+  const bool shared = shared_depth_noise(set);
+  if (shared) j["depth_noise"] = depth_noise_json(*set.depth_noise[0]);
   j["cameras"] = nlohmann::ordered_json::array();
-  for (std::size_t i = 0; i < set.cameras.size(); ++i) j["cameras"].push_back(camera_json(set.cameras[i], patterns[i]));
+  for (std::size_t i = 0; i < set.cameras.size(); ++i) {
+    j["cameras"].push_back(camera_json(set.cameras[i], patterns[i]));
+    if (!shared && i < set.depth_noise.size() && set.depth_noise[i])
+      j["cameras"].back()["depth_noise"] = depth_noise_json(*set.depth_noise[i]);
+  }
   write_text_file((folder / "cameras.json").string(), j.dump(2) + "\n");
 }
 
@@ -324,24 +355,52 @@ void warn_unknown_keys(const Json& j, const std::vector<std::string>& known, con
                                       qualified(ctx, it.key()), list));
 }
 
+DepthNoise parse_depth_noise(const Json& j, const std::string& file, const std::string& ctx) {
+  if (!j.is_object())
+    throw InputError(fmt::format("{}: '{}' must be an object {{\"sigma0_m\": ..., \"per_m2\": ..., \"along\": "
+                                 "\"depth\"}}, got {}; {}",
+                                 file, ctx, j.dump(), kDocs));
+  warn_unknown_keys(j, {"sigma0_m", "per_m2", "along"}, file, ctx);
+  DepthNoise n;
+  n.sigma0_m = j.contains("sigma0_m") ? get_number(j, "sigma0_m", file, ctx) : 0.0;
+  n.per_m2 = j.contains("per_m2") ? get_number(j, "per_m2", file, ctx) : 0.0;
+  const std::string along = j.contains("along") ? get_string(j, "along", file, ctx) : "depth";
+  if (along != "depth" && along != "ray")
+    throw InputError(fmt::format("{}: '{}.along' is '{}'; use \"depth\" (noise of the stored z depth) or \"ray\" "
+                                 "(noise of the distance along the viewing ray)",
+                                 file, ctx, along));
+  n.along_ray = along == "ray";
+  check_depth_noise(n, fmt::format("{}: {}", file, ctx));
+  return n;
+}
+
 // Everything of cameras.json; the images are read by read_frames.
 ObservationSet parse_header(const Json& j, const std::string& file) {
   check_format(j, file);
-  warn_unknown_keys(j, {"format", "dt", "depth_scale", "frame_count", "first_frame_time", "cameras"}, file, "");
+  warn_unknown_keys(j, {"format", "dt", "depth_scale", "frame_count", "first_frame_time", "depth_noise", "cameras"},
+                    file, "");
   ObservationSet set;
   set.dt = get_number(j, "dt", file, "");
   set.depth_scale = get_number(j, "depth_scale", file, "");
   set.frame_count = get_int(j, "frame_count", file, "");
   set.first_frame_time = j.contains("first_frame_time") ? get_number(j, "first_frame_time", file, "") : 0.0;
+  std::optional<DepthNoise> shared_noise;
+  if (j.contains("depth_noise")) shared_noise = parse_depth_noise(j["depth_noise"], file, "depth_noise");
   const Json& cams = get_key(j, "cameras", file, "");
   if (!cams.is_array()) throw InputError(fmt::format("{}: key 'cameras' must be an array of cameras", file));
+  bool any_noise = bool(shared_noise);
   for (std::size_t i = 0; i < cams.size(); ++i) {
     const std::string ctx = fmt::format("cameras[{}]", i);
     set.cameras.push_back(parse_camera(cams[i], file, ctx));
     set.depth_patterns.push_back(get_string(cams[i], "depth_pattern", file, ctx));
     warn_unknown_keys(cams[i], {"name", "width", "height", "fx", "fy", "cx", "cy", "camera_to_world", "min_depth",
-                                "max_depth", "depth_pattern"}, file, ctx);
+                                "max_depth", "depth_pattern", "depth_noise"}, file, ctx);
+    set.depth_noise.push_back(cams[i].contains("depth_noise")
+                                  ? parse_depth_noise(cams[i]["depth_noise"], file, ctx + ".depth_noise")
+                                  : shared_noise);
+    any_noise |= bool(set.depth_noise.back());
   }
+  if (!any_noise) set.depth_noise.clear();
   check_scalars(set.dt, set.depth_scale, set.first_frame_time, set.frame_count, set.cameras.size(), file);
   check_cameras(set.cameras, set.depth_patterns, set.frame_count, file);
   return set;
@@ -371,6 +430,11 @@ void read_frames(ObservationSet& set, const fs::path& folder, const std::string&
 }
 
 }  // namespace
+
+const DepthNoise* camera_depth_noise(const ObservationSet& set, int camera) {
+  if (camera < 0 || size_t(camera) >= set.depth_noise.size() || !set.depth_noise[size_t(camera)]) return nullptr;
+  return &*set.depth_noise[size_t(camera)];
+}
 
 std::string default_depth_pattern(int camera) { return fmt::format("cam{}/depth_%04d.png", camera); }
 

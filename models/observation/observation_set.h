@@ -4,7 +4,7 @@
 //
 //   DIR/cameras.json                    format "ssc-depth-v1", dt, depth_scale, frame_count,
 //                                       first_frame_time, cameras[] (intrinsics, pose, depth
-//                                       range, depth_pattern)
+//                                       range, depth_pattern, optional depth_noise)
 //   DIR/<depth_pattern % frame>         one 16-bit depth PNG per camera per frame
 //
 // Frame f was taken at time first_frame_time + f * dt; what that time means for a
@@ -13,6 +13,7 @@
 // folder behind.
 #pragma once
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +24,19 @@ namespace ssc {
 
 inline constexpr const char* kObservationFormat = "ssc-depth-v1";
 
+// A depth sensor's noise model: the standard deviation of one measured depth z (metres) is
+// sigma(z) = sigma0_m + per_m2 z^2 (the common model of structured-light and time-of-flight
+// sensors), measured along the camera's z axis (the stored depth) or along the viewing ray.
+struct DepthNoise {
+  double sigma0_m = 0;  // metres
+  double per_m2 = 0;    // 1/m: metres of noise per square metre of depth
+  bool along_ray = false;
+  double sigma(double z) const { return sigma0_m + per_m2 * z * z; }
+  bool operator==(const DepthNoise& o) const {
+    return sigma0_m == o.sigma0_m && per_m2 == o.per_m2 && along_ray == o.along_ray;
+  }
+};
+
 struct ObservationSet {
   double dt = 0;                  // seconds between observed frames
   double depth_scale = 0.001;     // metres per PNG unit
@@ -31,7 +45,11 @@ struct ObservationSet {
   std::vector<DepthCamera> cameras;
   std::vector<std::string> depth_patterns;         // per camera, relative to the folder
   std::vector<std::vector<DepthImage>> frames;     // frames[f][camera]
+  std::vector<std::optional<DepthNoise>> depth_noise;  // per camera, or empty: none given
 };
+
+// The noise model of `camera`, or null when cameras.json gives none.
+const DepthNoise* camera_depth_noise(const ObservationSet& set, int camera);
 
 // "cam<i>/depth_%04d.png", the pattern write_observations uses for camera i when
 // depth_patterns is empty.

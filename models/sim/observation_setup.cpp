@@ -85,6 +85,8 @@ ObservationSet render_observations(const Scene& scene, const SimGrid& grid, cons
   set.first_frame_time = 0;
   set.cameras = spec.cameras;
   for (size_t c = 0; c < spec.cameras.size(); ++c) set.depth_patterns.push_back(default_depth_pattern(int(c)));
+  // The renderer's noise, so that a fit can be compared with it (models/diagnosis/goodness_of_fit.h).
+  set.depth_noise.assign(spec.cameras.size(), DepthNoise{spec.noise, 0.0, true});
   const int frames = scene.time.steps / spec.every + 1;
   for (int f = 0; f < frames; ++f) {
     while (sim.steps_taken() < f * spec.every) sim.step();

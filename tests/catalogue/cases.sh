@@ -185,6 +185,8 @@ def cameras.frame-times 2 'dt' 'observed frames between simulation steps (dt 0.0
   'obs; edit obs/cameras.json "\"dt\": 0.02" "\"dt\": 0.03"; fixture ball.json' "$GRAD"
 def cameras.missing-key 2 'cameras[0].fx' 'camera without fx' \
   'obs; edit obs/cameras.json "\"fx\":" "\"focal\":"; fixture ball.json' "$GRAD"
+def cameras.depth-noise 2 'depth_noise.along && ray' 'depth noise model along an unknown direction ("along": "normal")' \
+  'obs; edit obs/cameras.json "\"along\": \"ray\"" "\"along\": \"normal\""; fixture ball.json' "$GRAD"
 def cameras.depth-range 2 'depth_0000.png && max_depth' 'depths beyond the camera'"'"'s max_depth (max_depth 0.5 m, the ball is at 0.7 m)' \
   'obs; edit obs/cameras.json "\"max_depth\": 3.0" "\"max_depth\": 0.5"; fixture ball.json' "$GRAD"
 def cameras.pattern-escape 2 'depth_pattern' 'depth_pattern that leaves the folder (../)' \

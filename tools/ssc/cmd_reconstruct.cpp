@@ -1,6 +1,7 @@
 // `ssc reconstruct SCENE --observations DIR --fit LIST --starts N --iterations K --out OUT`:
 // fits the named parameters from N perturbed starts (one batch), writes result.json,
-// history.csv, convergence plots and renders of the observed points over the best fit.
+// history.csv, convergence plots and renders of the observed points over the best fit, and
+// judges the best fit against the depth noise (models/diagnosis/goodness_of_fit.h).
 #include <fmt/format.h>
 
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "runtime/errors.h"
+#include "models/diagnosis/goodness_of_fit.h"
 #include "models/io/text_file.h"
 #include "models/io/output_dir.h"
 #include "models/io/svg_plot.h"
@@ -215,6 +217,10 @@ Command register_reconstruct(CLI::App& app) {
     if (r.best < 0) throw SimulationError(failure_summary(r));
     const StartRecord& best = r.starts[r.best];
     check_fit(r, o->observations);
+    PhysicalParameters fitted = nominal;
+    for (size_t i = 0; i < r.names.size(); ++i) set_parameter(fitted, r.names[i], best.final[i]);
+    const GoodnessOfFit fit = goodness_of_fit(problem, fitted, device);
+    warn_if_above_noise(fit);
 
     nlohmann::json j;
     j["parameters"] = named(r.names, best.final);
@@ -235,6 +241,7 @@ Command register_reconstruct(CLI::App& app) {
     j["observed_points"] = best.observed_points;
     j["nominal"] = named(r.names, r.nominal);
     j["convergence"] = convergence_summary(r);
+    j["goodness_of_fit"] = goodness_json(fit);
     j["optimizer"] = ro.optimizer;
     j["gradient"] = o->gradient;
     j["seed"] = ro.seed;
@@ -277,6 +284,7 @@ Command register_reconstruct(CLI::App& app) {
     write_text_file(out.file("history.csv"), csv);
     out.commit();
     print_report(r, j["convergence"]);
+    std::printf("%s\n", goodness_line(fit).c_str());
     std::printf("wrote %s: result.json, history.csv, convergence.svg, %zu renders (%.1f s)\n", o->out.c_str(), renders.size(),
                 r.wall_seconds);
     return 0;

@@ -1,12 +1,14 @@
 // `ssc residuals SCENE --observations DIR --params result.json --out OUT`: where the fitted
 // simulation disagrees with the observations (models/diagnosis/residuals.h): residuals.csv
 // (one row per observed point), residuals.json (by frame, phase, region, direction),
-// residual_vs_time.svg and report.html (residual images per camera, on the rest shape).
+// residual_vs_time.svg and report.html (residual images per camera, on the rest shape), and
+// how far the residual is above the depth noise (models/diagnosis/goodness_of_fit.h).
 #include <fmt/format.h>
 
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "models/diagnosis/goodness_of_fit.h"
 #include "models/diagnosis/report_data.h"
 #include "models/diagnosis/report_html.h"
 #include "models/diagnosis/residuals.h"
@@ -24,12 +26,16 @@
 namespace ssc {
 namespace {
 
-// The RMS residual per frame, contact events as vertical lines.
-void write_residual_plot(const std::string& path, const Residuals& r) {
+// The RMS residual per frame and the noise it is compared with, contact events as vertical lines.
+void write_residual_plot(const std::string& path, const Residuals& r, const GoodnessOfFit& fit) {
   PlotPanel p{"RMS residual of the matched points per frame (lines: contacts begin)", "time [s]", "residual [mm]",
               false, false, true, {}, {}};
   PlotSeries s{"fit", {}, {}, "#1f77b4", 2.0, true};
   for (const FrameResiduals& f : r.frames) s.x.push_back(f.time), s.y.push_back(1e3 * f.rms);
+  PlotSeries noise{"depth noise", {}, {}, "#999999", 1.5, false};
+  for (size_t f = 0; f < fit.frames.size(); ++f)
+    if (fit.frames[f].noise_m > 0) noise.x.push_back(fit.frame_times_s[f]), noise.y.push_back(1e3 * fit.frames[f].noise_m);
+  if (!noise.x.empty()) p.series.push_back(noise);
   p.series.push_back(s);
   p.vertical_lines = r.contact_times;
   write_svg_plot(path, {p});
@@ -65,12 +71,17 @@ Command register_residuals(CLI::App& app) {
     if (!o->params.empty()) out.manifest()["params"] = {{"file", o->params}, {"set", fitted.set}};
     out.manifest()["device"] = device == "cuda" ? gpu_description() : "cpu";
     const Residuals r = compute_residuals(problem, PhysicalParameters::from_scene(problem.scene), device);
-    const nlohmann::json summary = residual_summary(r);
+    nlohmann::json summary = residual_summary(r);
+    const GoodnessOfFit fit = goodness_of_fit(problem, r);
+    warn_if_above_noise(fit);
+    summary["goodness_of_fit"] = goodness_json(fit);
     write_text_file(out.file("residuals.csv"), residuals_csv(r));
     write_text_file(out.file("residuals.json"), summary.dump(2) + "\n");
-    write_residual_plot(out.file("residual_vs_time.svg"), r);
+    write_residual_plot(out.file("residual_vs_time.svg"), r, fit);
     nlohmann::json data;
     data["title"] = "ssc residuals: " + o->scene;
+    data["summary_lines"] = {goodness_line(fit)};
+    if (fit.above_noise) data["summary_lines"].push_back("Warning: " + fit.warning);
     data["provenance"] = {{"scene", o->scene}, {"observations", o->observations}, {"params", o->params}};
     add_residual_report_data(data, problem, r, nullptr);
     write_report_html(out.file("report.html"), data);
@@ -81,6 +92,7 @@ Command register_residuals(CLI::App& app) {
     for (const auto& [phase, a] : summary["by_phase"].items())
       std::printf("  %-22s %6d points, %5.1f %% matched, RMS %.3g mm\n", phase.c_str(), a["points"].get<int>(),
                   100 * a["matched_fraction"].get<double>(), 1e3 * a["rms_m"].get<double>());
+    std::printf("%s\n", goodness_line(fit).c_str());
     std::printf("wrote %s: residuals.csv, residuals.json, residual_vs_time.svg, report.html\n", o->out.c_str());
     return 0;
   };
