@@ -24,6 +24,9 @@ std::string plane_parameter(int k, const std::string& key) {
 }
 
 int extra_parameter_count(const ExtensionRow& row, const Scene& scene) {
+  // The others' parameters (a new plane's height, a new region's modulus) are scalars the
+  // scene does not have yet.
+  if (row.fit != ExtensionRow::Fit::OffValue) return int(row.parameters(scene).size());
   return int(expand_parameter_names(row.parameters(scene), PhysicalParameters::from_scene(scene)).size());
 }
 

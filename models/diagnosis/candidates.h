@@ -15,7 +15,7 @@ namespace ssc {
 double body_extent(const SimGrid& grid);
 // "ground.friction" for plane 0, "ground.planes[k].friction" for the others.
 std::string plane_parameter(int k, const std::string& key);
-// Parameters after expansion (material.stiffness_gradient: 3) a candidate fits in this scene.
+// Parameters (after expansion: material.stiffness_gradient is 3) a candidate fits in this scene.
 int extra_parameter_count(const ExtensionRow& row, const Scene& scene);
 
 // The spec of an OffValue or ModelSwitch candidate.

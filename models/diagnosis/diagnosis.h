@@ -33,41 +33,12 @@
 #include <tuple>
 #include <vector>
 
+#include "models/diagnosis/fitted_model.h"
 #include "models/diagnosis/identifiability.h"
 #include "models/sim/extensions.h"
 #include "models/sim/problem.h"
 
 namespace ssc {
-
-struct DiagnosisOptions {
-  std::vector<std::string> fit = {"youngs_modulus"};  // the base model's fitted parameters
-  std::vector<std::string> candidates = extension_names();
-  int starts = 8, iterations = 30;
-  std::uint64_t seed = 1;
-  std::string optimizer = "rprop";
-  std::string device = "cpu";
-  double holdout = 0.3;     // the last fraction of the frames, held out
-  double min_gain = 0.2;    // of the base model's held-out cost
-  double margin = 0.05;     // over the placebo's gain
-  int bootstrap = 2000;
-};
-
-// One fitted model (the base, a candidate or a placebo).
-struct FittedModel {
-  std::string name;
-  Problem problem;                       // the model's scene (with the extension on), all frames
-  std::vector<std::string> names;        // fitted parameters
-  Eigen::VectorXd values;                // their fitted values
-  std::vector<std::string> extra;        // the extension's own parameters (a subset of names)
-  std::vector<double> frame_costs;       // every frame's J_SSC term at the fit
-  double heldin_cost = 0, heldout_cost = 0;
-  bool failed = false;
-  std::string failure, note;
-  std::string stop_reason;         // of the best start
-  int starts = 0, converged_starts = 0;
-  std::string proposal;            // what the data proposed (a plane, an interface), if anything
-  double seconds = 0;
-};
 
 struct CandidateVerdict {
   std::string name;

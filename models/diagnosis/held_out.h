@@ -6,7 +6,7 @@
 #include <utility>
 #include <vector>
 
-#include "models/diagnosis/diagnosis.h"
+#include "models/diagnosis/fitted_model.h"
 
 namespace ssc {
 

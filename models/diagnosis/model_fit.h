@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-#include "models/diagnosis/diagnosis.h"
+#include "models/diagnosis/fitted_model.h"
 
 namespace ssc {
 
