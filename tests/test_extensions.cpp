@@ -91,10 +91,15 @@ TEST(PlausibleRanges, ComeFromTheTableTheBodyAndTheScene) {
   // A stiffness gradient: the modulus changes at most 1000 times across the body.
   EXPECT_NEAR(plausible_range(defaults, "material.stiffness_gradient.x", 0.5).second * 0.5, std::log(1000.0), 1e-12);
   EXPECT_FALSE(std::isfinite(plausible_range(defaults, "ground.height", 0.2).second));
+  EXPECT_EQ(implausibility(defaults, "air_drag", 1.2, 0.2), "");
+  const std::string why = implausibility(defaults, "air_drag", 20, 0.2);
+  EXPECT_NE(why.find("air_drag = 20 kg/m^3 is outside its plausible range [0, 1.5]"), std::string::npos) << why;
+  EXPECT_NE(why.find("\"plausible\""), std::string::npos) << why;
   // A body in water: the scene widens the range.
   j["plausible"] = {{"air_drag", {0, 1100}}};
   EXPECT_EQ(plausible_range(parse_scene(j, "plausible.json"), "air_drag", 0.2, &source), std::make_pair(0.0, 1100.0));
   EXPECT_NE(source.find("plausible.air_drag"), std::string::npos) << source;
+  EXPECT_EQ(implausibility(parse_scene(j, "plausible.json"), "air_drag", 20, 0.2), "");
   for (const json& bad : {json{{"air_drag", {1100, 0}}}, json{{"air_drag", 3}}, json{{"air_dreg", {0, 1}}},
                           json::array({0, 1})}) {
     j["plausible"] = bad;

@@ -10,15 +10,6 @@
 
 namespace ssc {
 
-double body_extent(const SimGrid& grid) {
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
-  for (int i = 0; i < grid.node_count; ++i) {
-    const Eigen::Vector3d x = grid.sdf.node_position(grid.node_grid[size_t(i)]);
-    lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-  }
-  return grid.node_count > 0 ? (hi - lo).maxCoeff() : 1.0;
-}
-
 std::string plane_parameter(int k, const std::string& key) {
   return k == 0 ? "ground." + key : fmt::format("ground.planes[{}].{}", k, key);
 }

@@ -11,8 +11,6 @@
 
 namespace ssc {
 
-// The largest extent of the rest body (m).
-double body_extent(const SimGrid& grid);
 // "ground.friction" for plane 0, "ground.planes[k].friction" for the others.
 std::string plane_parameter(int k, const std::string& key);
 // Parameters (after expansion: material.stiffness_gradient is 3) a candidate fits in this scene.

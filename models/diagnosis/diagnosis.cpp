@@ -55,7 +55,7 @@ DiagnosisContext prepare(Diagnosis& d, const std::string& scene_path, const std:
                                  observations, n, o.holdout));
   d.heldout_from = probe.frames[size_t(d.heldin_frames)].step * probe.scene.time.dt;
   c.heldin = d.heldin_frames;
-  c.extent = body_extent(probe.grid);
+  c.extent = rest_extent(probe.grid);
   *scene = probe.scene;
   return c;
 }

@@ -290,4 +290,13 @@ int find_cell(const SimGrid& grid, const Eigen::Vector3d& rest_point, Eigen::Vec
   return cell;
 }
 
+double rest_extent(const SimGrid& grid) {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  for (int i = 0; i < grid.node_count; ++i) {
+    const Eigen::Vector3d x = grid.sdf.node_position(grid.node_grid[size_t(i)]);
+    lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  }
+  return grid.node_count > 0 ? (hi - lo).maxCoeff() : 1.0;
+}
+
 }  // namespace ssc

@@ -56,4 +56,7 @@ SimGrid build_sim_grid(SdfGrid sdf, const GridOptions& options, const std::strin
 // Cell containing a rest-pose point and its local coordinates in [0,1]^3, or -1.
 int find_cell(const SimGrid& grid, const Eigen::Vector3d& rest_point, Eigen::Vector3d* local);
 
+// The largest extent of the rest body's nodes along an axis (m); 1 for an empty grid.
+double rest_extent(const SimGrid& grid);
+
 }  // namespace ssc

@@ -194,4 +194,14 @@ std::pair<double, double> plausible_range(const Scene& scene, const std::string&
   return {row.plausible_lower, row.plausible_upper};
 }
 
+std::string implausibility(const Scene& scene, const std::string& parameter, double value, double extent) {
+  std::string source;
+  const auto [lo, hi] = plausible_range(scene, parameter, extent, &source);
+  if (value >= lo && value <= hi) return "";
+  const std::string unit = parameter_row(parameter).unit;
+  return fmt::format("{} = {:.4g}{} is outside its plausible range [{:g}, {:g}] ({}); no physical object of this kind "
+                     "has it. If yours does, widen the range in the scene: \"plausible\": {{\"{}\": [LOWER, UPPER]}}",
+                     parameter, value, unit == "1" ? "" : " " + unit, lo, hi, source, parameter);
+}
+
 }  // namespace ssc

@@ -72,5 +72,8 @@ void switch_off_extensions(Scene& scene);
 // where the range comes from, for messages ("air: 1.2 kg/m^3").
 std::pair<double, double> plausible_range(const Scene& scene, const std::string& parameter, double extent,
                                           std::string* source = nullptr);
+// Empty when the value lies within its plausible range, else why it is not plausible and how
+// to widen the range ("air_drag = 20 kg/m^3 is outside its plausible range [0, 1.5] (air: ...)").
+std::string implausibility(const Scene& scene, const std::string& parameter, double value, double extent);
 
 }  // namespace ssc

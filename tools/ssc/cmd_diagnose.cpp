@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "models/diagnosis/diagnosis.h"
+#include "models/diagnosis/goodness_of_fit.h"
 #include "models/diagnosis/report_data.h"
 #include "models/diagnosis/report_html.h"
 #include "models/diagnosis/residuals.h"
@@ -91,7 +92,6 @@ Command register_diagnose(CLI::App& app) {
     dj["options"] = {{"fit", opt.fit},           {"candidates", opt.candidates}, {"starts", opt.starts},
                      {"iterations", opt.iterations}, {"holdout", opt.holdout},   {"seed", opt.seed},
                      {"min_gain", opt.min_gain}, {"margin", opt.margin}};
-    dj["warnings"] = warnings_json();
     // Residuals of the base fit, and of the named extension's (else of none).
     const Residuals before = compute_residuals(d.base.problem, fitted_parameters(d.base), opt.device);
     const FittedModel* winner = nullptr;
@@ -101,10 +101,19 @@ Command register_diagnose(CLI::App& app) {
     if (winner) after = compute_residuals(winner->problem, fitted_parameters(*winner), opt.device);
     write_text_file(out.file("residuals_base.csv"), residuals_csv(before));
     dj["residuals_base"] = residual_summary(before);
+    // How far the final model (the named extension's, else the base) is above the noise.
+    const GoodnessOfFit fit_base = goodness_of_fit(d.base.problem, before);
+    dj["base"]["goodness_of_fit"] = goodness_json(fit_base);
+    GoodnessOfFit fit_final = fit_base;
     if (winner) {
       write_text_file(out.file("residuals_" + d.cause + ".csv"), residuals_csv(after));
       dj["residuals_" + d.cause] = residual_summary(after);
+      fit_final = goodness_of_fit(winner->problem, after);
+      for (nlohmann::json& c : dj["candidates"])
+        if (c["name"] == d.cause) c["goodness_of_fit"] = goodness_json(fit_final);
     }
+    warn_if_above_noise(fit_final);
+    dj["warnings"] = warnings_json();
     nlohmann::json data = report_data(d, dj, o->scene, o->observations, device);
     add_residual_report_data(data, d.base.problem, before, winner ? &after : nullptr);
     data["residual_vs_time"]["heldout_from"] = d.heldout_from;
@@ -118,6 +127,8 @@ Command register_diagnose(CLI::App& app) {
                   100 * v.gain_low, 100 * v.gain_high, 100 * v.placebo_gain, v.score, v.event_aic,
                   v.passes ? "  named" : "");
     for (const std::string& line : d.lines) std::printf("%s\n", line.c_str());
+    std::printf("%s%s\n", (winner ? "with " + d.cause + ", " : std::string("the base model, ")).c_str(),
+                goodness_line(fit_final).c_str());
     std::printf("wrote %s: diagnosis.json, report.html, residuals (%.1f s)\n", o->out.c_str(), d.seconds);
     return 0;
   };

@@ -17,6 +17,7 @@
 #include "models/io/output_dir.h"
 #include "models/io/svg_plot.h"
 #include "models/optim/reconstruction.h"
+#include "models/sim/extensions.h"
 #include "models/sim/parameters.h"
 #include "models/sim/problem.h"
 #include "models/sim/units.h"
@@ -218,7 +219,12 @@ Command register_reconstruct(CLI::App& app) {
     const StartRecord& best = r.starts[r.best];
     check_fit(r, o->observations);
     PhysicalParameters fitted = nominal;
-    for (size_t i = 0; i < r.names.size(); ++i) set_parameter(fitted, r.names[i], best.final[i]);
+    for (size_t i = 0; i < r.names.size(); ++i) {
+      set_parameter(fitted, r.names[i], best.final[i]);
+      if (const std::string why = implausibility(problem.scene, r.names[i], best.final[i], rest_extent(problem.grid));
+          !why.empty())
+        warn("implausible_value", why);
+    }
     const GoodnessOfFit fit = goodness_of_fit(problem, fitted, device);
     warn_if_above_noise(fit);
 
