@@ -189,6 +189,10 @@ def cameras.depth-range 2 'depth_0000.png && max_depth' 'depths beyond the camer
   'obs; edit obs/cameras.json "\"max_depth\": 3.0" "\"max_depth\": 0.5"; fixture ball.json' "$GRAD"
 def cameras.pattern-escape 2 'depth_pattern' 'depth_pattern that leaves the folder (../)' \
   'obs; edit obs/cameras.json "cam0/depth_" "../cam0/depth_"; fixture ball.json' "$GRAD"
+def cameras.frame-times-order 2 'cameras.json && frame_times[2] && increase strictly' 'frame_times not increasing (the third frame at 0.01 s, before the second at 0.02 s)' \
+  'obs; edit obs/cameras.json "0.04," "0.01,"; fixture ball.json' "$GRAD"
+def cameras.frame-times-off-step 2 'cameras.json && frame_times[2] && time.dt' 'a frame time between two simulation steps (0.05 s against time.dt 0.02 s)' \
+  'obs; edit obs/cameras.json "0.04," "0.05,"; fixture ball.json' "$GRAD"
 def scene.no-observation 2 'observation' 'observe a scene without an observation section' \
   'fixture mesh.json cube.obj' 'ssc observe mesh.json --out out'
 
@@ -249,6 +253,11 @@ def body.coarse-torus-3 2 'too coarse && grid.resolution' 'thin torus on a grid 
   'scene torus.json scene.json "\"resolution\": 30" "\"resolution\": 3"' "$SIM"
 def body.coarse-torus-2 2 'scene.json && grid.resolution' 'thin torus on a grid of resolution 2' \
   'scene torus.json scene.json "\"resolution\": 30" "\"resolution\": 2"' "$SIM"
+def body.resting-start 0 'warning && ground plane 0 && object.position' 'sphere placed on the ground (the soft-min contact pushes before touching): a warning with the distance it will move and the resting position, recorded in summary.json' \
+  'scene ball.json scene.json "\"position\": [0, 0.15, 0]" "\"position\": [0, 0.1, 0]"' 'ssc simulate scene.json --out out --no-frames && grep -q resting_start out/summary.json || { echo "catalogue: no resting_start warning in out/summary.json" >&2; exit 98; }' writes
+def match.table 2 'ground.planes[0] && the table && segment the body' 'depth of a table patch on the ground plane left in (a resting flat box whose top is the plane, rendered with ssc observe)' \
+  'fixture ball.json; ssc observe ball.json --out table --set ground.enabled=false --set gravity=[0,0,0] --set grid={\"cell_size\":0.01} --set "object={\"primitive\": \"box\", \"half_extents\": [0.12, 0.02, 0.12], \"position\": [0, -0.02, 0]}" >/dev/null 2>&1' \
+  'ssc gradient ball.json --observations table --params youngs_modulus'
 def match.far-away 2 'observed points' 'observations of the ball, scene moved 5 m aside (no point matches)' \
   'obs; fixture ball.json' 'ssc gradient ball.json --observations obs --set object.position=[5,0.15,0]'
 def match.flipped-camera 2 'observed points' 'camera pose in OpenGL convention (looks away from the body)' \
