@@ -113,7 +113,9 @@ def missing.cameras-json 2 'cameras.json' 'observation folder without cameras.js
   'obs; rm obs/cameras.json; fixture ball.json' "$GRAD"
 def missing.depth-png 2 'depth_0002.png' 'one depth PNG of a frame missing' \
   'obs; rm obs/cam0/depth_0002.png; fixture ball.json' "$GRAD"
-def missing.frames 2 'depth_0005.png' 'cameras.json promises 9 frames, the folder has 5' \
+def missing.frames 2 'depth_0005.png && frame_times' 'cameras.json (without frame_times) promises 9 frames, the folder has 5' \
+  'obs; edit obs/cameras.json "\"frame_count\": 5" "\"frame_count\": 9" "\"frame_times\"" "\"unused_times\""; fixture ball.json' "$GRAD"
+def missing.frame-times 2 'cameras.json && frame_times has 5 entries && frame_count = 9' 'cameras.json promises 9 frames and lists 5 frame_times' \
   'obs; edit obs/cameras.json "\"frame_count\": 5" "\"frame_count\": 9"; fixture ball.json' "$GRAD"
 def folder.scene 2 'scene.json && folder' 'scene path is a folder' \
   'mkdir scene.json' "$SIM"
@@ -181,8 +183,8 @@ def cameras.non-rigid 2 'camera_to_world' 'camera_to_world with a rotation scale
   'obs; edit obs/cameras.json "-1.0," "-2.0," "        1.0,
         0.0," "        2.0,
         0.0,"; fixture ball.json' "$GRAD"
-def cameras.frame-times 2 'dt' 'observed frames between simulation steps (dt 0.03 against time.dt 0.02)' \
-  'obs; edit obs/cameras.json "\"dt\": 0.02" "\"dt\": 0.03"; fixture ball.json' "$GRAD"
+def cameras.frame-times 2 'dt' 'a folder without frame_times whose frames fall between simulation steps (dt 0.03 against time.dt 0.02)' \
+  'obs; edit obs/cameras.json "\"dt\": 0.02" "\"dt\": 0.03" "\"frame_times\"" "\"unused_times\""; fixture ball.json' "$GRAD"
 def cameras.missing-key 2 'cameras[0].fx' 'camera without fx' \
   'obs; edit obs/cameras.json "\"fx\":" "\"focal\":"; fixture ball.json' "$GRAD"
 def cameras.depth-range 2 'depth_0000.png && max_depth' 'depths beyond the camera'"'"'s max_depth (max_depth 0.5 m, the ball is at 0.7 m)' \
