@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -36,9 +37,12 @@ const std::string kScene = std::string(SSC_SOURCE_DIR) + "/tests/catalogue/fixtu
 const std::vector<std::string> kSteps = {"time.steps=10"};
 constexpr int kDropped = 7;
 
-ObservationSet rendered() {
-  const Scene scene = load_scene(kScene, kSteps);
-  return render_observations(scene, build_body_grid(scene), parse_observation_spec(scene));
+const ObservationSet& rendered() {
+  static const ObservationSet set = [] {
+    const Scene scene = load_scene(kScene, kSteps);
+    return render_observations(scene, build_body_grid(scene), parse_observation_spec(scene));
+  }();
+  return set;
 }
 
 ObservationSet without_frame(ObservationSet set, int f) {
@@ -51,10 +55,11 @@ ObservationSet without_frame(ObservationSet set, int f) {
 double fitted_youngs_modulus(const Problem& problem) {
   ReconstructionOptions o;
   o.fit = {"youngs_modulus"};
-  o.starts = 2;
+  o.starts = 1;  // from twice the scene's 5 kPa (much softer starts gain energy at dt = 0.02 s)
+  o.initial_values = {Eigen::VectorXd::Constant(1, 10000.0)};
   o.optimizer_options.max_iterations = 12;
   const ReconstructionResult r = reconstruct(problem, o);
-  EXPECT_GE(r.best, 0);
+  for (const StartRecord& start : r.starts) EXPECT_FALSE(start.failed) << start.failure;
   return r.starts.at(std::size_t(r.best)).final[0];
 }
 
@@ -96,6 +101,8 @@ TEST(FrameTimes, ADroppedFrameIsAGapNotARenumbering) {
   const double e_reference = fitted_youngs_modulus(reference);
   const double e_gap = fitted_youngs_modulus(with_gap);
   const double e_naive = fitted_youngs_modulus(naive);
+  std::printf("fitted E: intact without frame %d %.6g Pa, with the gap in frame_times %.6g Pa, renumbered %.6g Pa "
+              "(truth %.6g Pa)\n", kDropped, e_reference, e_gap, e_naive, truth);
   EXPECT_DOUBLE_EQ(e_gap, e_reference);
   EXPECT_NEAR(e_reference, truth, 0.1 * truth);
   EXPECT_GT(std::abs(e_naive - e_reference), 0.02 * truth) << "the renumbered folder fits like the intact one";
@@ -118,7 +125,7 @@ void expect_times_error(const std::string& name, const std::function<void(nlohma
 
 TEST(FrameTimes, BadTimesNameTheFileAndKey) {
   expect_times_error("decreasing", [](nlohmann::json& j) { j["frame_times"][4] = 0.05; },
-                     {"frame_times[5]", "not after frame_times[4]", "increase strictly"});
+                     {"frame_times[4] = 0.05", "not after frame_times[3]", "increase strictly"});
   expect_times_error("equal", [](nlohmann::json& j) { j["frame_times"][3] = 0.04; },
                      {"frame_times[3]", "not after frame_times[2]"});
   expect_times_error("count", [](nlohmann::json& j) { j["frame_times"].erase(10); },

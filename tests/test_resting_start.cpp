@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "models/io/run_record.h"
@@ -19,16 +20,15 @@ namespace {
 using json = nlohmann::json;
 
 // A 0.2 m cube of 500 kg/m^3 (39 N) whose bottom face is at height `bottom` over a stiff
-// ground (k = 1e6 Pa/m, alpha = 100 /m: touching, the bottom face alone is pushed with
+// ground at height `ground` (k = 1e6 Pa/m, alpha = 100 /m: touching, the bottom face alone is pushed with
 // k A ln 2 / alpha = 277 N). Stiff material and no damping, so the motion is nearly rigid.
-Scene cube(double bottom, const Eigen::Vector3d& shift = Eigen::Vector3d::Zero()) {
+Scene cube(double bottom, double ground = 0) {
   const json j = {
-      {"object",
-       {{"primitive", "box"}, {"half_extents", {0.1, 0.1, 0.1}}, {"position", {shift.x(), bottom + 0.1 + shift.y(), shift.z()}}}},
+      {"object", {{"primitive", "box"}, {"half_extents", {0.1, 0.1, 0.1}}, {"position", {0, bottom + 0.1, 0}}}},
       {"grid", {{"cell_size", 0.05}}},
       {"material", {{"youngs_modulus", 1e6}, {"poisson_ratio", 0.3}, {"density", 500}, {"mass_damping", 0},
                     {"stiffness_damping", 0}}},
-      {"ground", {{"height", 0}, {"stiffness", 1e6}, {"softmin_alpha", 100}}},
+      {"ground", {{"height", ground}, {"stiffness", 1e6}, {"softmin_alpha", 100}}},
       {"time", {{"dt", 0.002}, {"steps", 200}, {"theta", 0.5}}}};
   return parse_scene(j, "cube.json");
 }
@@ -63,7 +63,7 @@ TEST(RestingStart, ACubeOnTheGroundIsThrownUpAndTheWarningSaysHowFar) {
     const Warning* w = resting_warning();
     ASSERT_NE(w, nullptr);
     for (const char* part : {"cube.json", "ground plane 0", bottom == 0 ? "0 m above" : "0.001 m inside",
-                             "thrown off the plane", "object.position"})
+                             "thrown off the plane", "ground.planes[0].height"})
       EXPECT_NE(w->message.find(part), std::string::npos) << part << " not in: " << w->message;
     const std::vector<RestingStart> jumps = resting_start_jumps(grid, sim.parameters(0), sim.fixed_nodes());
     ASSERT_EQ(jumps.size(), 1u);
@@ -86,8 +86,10 @@ TEST(RestingStart, AtTheEquilibriumTheCubeStaysStillAndNothingIsSaid) {
   ASSERT_EQ(jumps.size(), 1u);
   const double lift = jumps[0].equilibrium;
   EXPECT_GT(lift, 0.01);  // a stiff contact holds the cube above the plane
+  // The warning's fix: the plane lowered by that much (the cube, and so its grid, stay).
+  EXPECT_NE(resting_warning()->message.find(fmt::format("ground.planes[0].height to {:.6g}", -lift)), std::string::npos);
   clear_warnings();
-  const Scene rest = cube(0.0, Eigen::Vector3d(0, lift, 0));
+  const Scene rest = cube(0.0, -lift);
   const SimGrid grid = build_body_grid(rest);
   Simulation sim(rest, grid);
   EXPECT_EQ(resting_warning(), nullptr);

@@ -97,22 +97,21 @@ std::vector<RestingStart> resting_start_jumps(const SimGrid& grid, const Physica
   return jumps;
 }
 
-std::string resting_start_message(const RestingStart& r, const PhysicalParameters& p,
-                                  const Eigen::Vector3d& object_position) {
+std::string resting_start_message(const RestingStart& r, const PhysicalParameters& p) {
   const PlaneSpec& plane = p.planes[std::size_t(r.plane)];
   const Eigen::Vector3d n = plane.normal.normalized();
-  const Eigen::Vector3d rest = object_position + r.equilibrium * n;
   return fmt::format(
       "the body starts {:.3g} m {} ground plane {} (height {:g} m, normal [{:.3g}, {:.3g}, {:.3g}]), within the reach "
       "of its soft-min contact ({:.3g} m, where the push falls to {:.0f} % of the weight; the contact acts before "
       "touching, the more so the larger ground.stiffness / ground.softmin_alpha): it pushes with {:.3g} N against a "
       "weight of {:.3g} N, so the body does not start at rest. It will {} by up to {:.3g} m (rigid estimate without "
-      "damping) and settle {:.3g} m {} its start. For a resting start, set object.position to [{:.6g}, {:.6g}, {:.6g}] "
-      "(the contact's equilibrium under gravity)",
+      "damping) and settle {:.3g} m {} its start. For a resting start, set ground.planes[{}].height to {:.6g} (the "
+      "contact's equilibrium under gravity; the body stays where the observations show it), or move the object by "
+      "{:.3g} m along the plane's normal (which resamples its grid)",
       std::abs(r.lowest), r.lowest >= 0 ? "above" : "inside", r.plane, plane.height, n.x(), n.y(), n.z(), r.reach,
       100 * kRestingReachFraction, r.push, r.weight, r.excursion > 0 ? "be thrown off the plane" : "sink into it",
-      std::abs(r.excursion), std::abs(r.equilibrium), r.equilibrium > 0 ? "above" : "below", rest.x(), rest.y(),
-      rest.z());
+      std::abs(r.excursion), std::abs(r.equilibrium), r.equilibrium > 0 ? "above" : "below", r.plane,
+      plane.height - r.equilibrium, r.equilibrium);
 }
 
 }  // namespace ssc

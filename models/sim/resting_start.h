@@ -3,7 +3,7 @@
 // point at distance d (k A ln 2 / alpha when touching), so a body placed on a plane is thrown
 // up, or sinks in, at the first step. Checked once, for the scene's values, when a
 // simulation starts; the body is left where the scene puts it (docs/decisions.md, decision 12),
-// and a warning says how far it will move and where it would rest.
+// and a warning says how far it will move and where the plane would hold it at rest.
 //
 // For each plane (stiffness > 0, gravity pressing the body onto it, no fixed nodes), with
 // the rest body moved rigidly by s along the plane's normal:
@@ -15,7 +15,6 @@
 // A body starting within the reach whose excursion exceeds kRestingStartTolerance is
 // reported.
 #pragma once
-#include <Eigen/Core>
 #include <string>
 #include <vector>
 
@@ -41,8 +40,8 @@ struct RestingStart {
 std::vector<RestingStart> resting_start_jumps(const SimGrid& grid, const PhysicalParameters& p,
                                               const std::vector<char>& fixed_nodes);
 
-// The warning for one plane: what happens and the object.position of a resting start.
-std::string resting_start_message(const RestingStart& r, const PhysicalParameters& p,
-                                  const Eigen::Vector3d& object_position);
+// The warning for one plane: what happens, and the plane height of a resting start (moving
+// the plane keeps the grid; moving the body resamples it on the grid's fixed lattice).
+std::string resting_start_message(const RestingStart& r, const PhysicalParameters& p);
 
 }  // namespace ssc

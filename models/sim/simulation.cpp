@@ -64,7 +64,7 @@ Simulation::Simulation(const Scene& scene, const SimGrid& grid, int batch, bool 
   for (SimulationAudit& a : audits_) a.tolerance = scene.solver.energy_tolerance;
   if (const std::string inside = initial_penetration(grid, params_[0]); !inside.empty()) throw InputError(scene.file + ": " + inside);
   for (const RestingStart& r : resting_start_jumps(grid, params_[0], fixed_))
-    warn("resting_start", scene.file + ": " + resting_start_message(r, params_[0], scene.object.transform.position));
+    warn("resting_start", scene.file + ": " + resting_start_message(r, params_[0]));
   reset();
 }
 

@@ -255,7 +255,7 @@ def body.coarse-torus-3 2 'too coarse && grid.resolution' 'thin torus on a grid 
   'scene torus.json scene.json "\"resolution\": 30" "\"resolution\": 3"' "$SIM"
 def body.coarse-torus-2 2 'scene.json && grid.resolution' 'thin torus on a grid of resolution 2' \
   'scene torus.json scene.json "\"resolution\": 30" "\"resolution\": 2"' "$SIM"
-def body.resting-start 0 'warning && ground plane 0 && object.position' 'sphere placed on the ground (the soft-min contact pushes before touching): a warning with the distance it will move and the resting position, recorded in summary.json' \
+def body.resting-start 0 'warning && ground plane 0 && thrown off && ground.planes[0].height' 'sphere placed on the ground (the soft-min contact pushes before touching): a warning with the distance it will move and the plane height of a resting start, recorded in summary.json' \
   'scene ball.json scene.json "\"position\": [0, 0.15, 0]" "\"position\": [0, 0.1, 0]"' 'ssc simulate scene.json --out out --no-frames && grep -q resting_start out/summary.json || { echo "catalogue: no resting_start warning in out/summary.json" >&2; exit 98; }' writes
 def match.table 2 'ground.planes[0] && the table && segment the body' 'depth of a table patch on the ground plane left in (a resting flat box whose top is the plane, rendered with ssc observe)' \
   'fixture ball.json; ssc observe ball.json --out table --set ground.enabled=false --set gravity=[0,0,0] --set grid={\"cell_size\":0.01} --set "object={\"primitive\": \"box\", \"half_extents\": [0.12, 0.02, 0.12], \"position\": [0, -0.02, 0]}" >/dev/null 2>&1' \
