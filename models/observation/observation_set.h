@@ -52,9 +52,9 @@ std::string depth_file_name(const std::string& pattern, int frame, const std::st
 
 // Checks sizes and contents of an in-memory set (what write_observations will write):
 // dt > 0, depth_scale > 0, frame_count >= 1 matching frames, frame_times (if any) one per
-// frame, strictly increasing and spaced about dt apart, depth_noise (if any) >= 0, one image per camera per frame
-// with the camera's size, valid cameras and patterns (distinct files), every depth 0 or in
-// [min_depth, max_depth]. Throws InputError naming `where`.
+// frame, strictly increasing and spaced about dt apart, depth_noise (if any) >= 0, one image
+// per camera per frame with the camera's size, valid cameras and patterns (distinct files),
+// every depth 0 or in [min_depth, max_depth]. Throws InputError naming `where`.
 void validate_observations(const ObservationSet& set, const std::string& where);
 
 // Writes the set into `dir` as an ssc output folder (models/io/output_dir.h): atomically,

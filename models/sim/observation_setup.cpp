@@ -137,7 +137,7 @@ std::vector<ObservedFrame> observed_frames(const ObservationSet& set, double sim
     if (!set.frame_times.empty()) {
       frame.step = step_of_frame_time(set, f, sim_dt, f > 0 ? frames.back().step : -1, file);
     } else {
-      const double t = set.first_frame_time + f * set.dt;
+      const double t = frame_time(set, f);
       const double steps = t / sim_dt;
       const double rounded = std::round(steps);
       if (std::abs(steps - rounded) > 1e-6 * std::max(1.0, steps))
