@@ -141,6 +141,40 @@ void check_scalars(double dt, double depth_scale, double first_frame_time, int f
   if (cameras == 0) throw InputError(fmt::format("{}: the set has no cameras; list at least one", where));
 }
 
+// How far the median interval of frame_times may be from dt (either way): enough for a
+// recording that lost every other frame, far too little for milliseconds or frame numbers.
+constexpr double kFrameIntervalFactor = 2.5;
+
+// frame_times: one per frame, finite, strictly increasing, starting at first_frame_time and
+// spaced about dt apart.
+void check_frame_times(const ObservationSet& set, const std::string& where) {
+  const std::vector<double>& t = set.frame_times;
+  if (t.empty()) return;
+  if (t.size() != std::size_t(set.frame_count))
+    throw InputError(fmt::format("{}: frame_times has {} entries but frame_count = {}; give one time (seconds) per "
+                                 "frame, in the order of the frame files", where, t.size(), set.frame_count));
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (!std::isfinite(t[i]))
+      throw InputError(fmt::format("{}: frame_times[{}] is not a finite number of seconds", where, i));
+    if (i > 0 && !(t[i] > t[i - 1]))
+      throw InputError(fmt::format("{}: frame_times[{}] = {} s is not after frame_times[{}] = {} s; the times must "
+                                   "increase strictly (one per frame file, in file order)",
+                                   where, i, t[i], i - 1, t[i - 1]));
+  }
+  if (std::abs(set.first_frame_time - t[0]) > 1e-9 * std::max(1.0, std::abs(t[0])))
+    throw InputError(fmt::format("{}: first_frame_time = {} s but frame_times[0] = {} s; leave first_frame_time out "
+                                 "or make it frame_times[0]", where, set.first_frame_time, t[0]));
+  if (t.size() < 2) return;
+  std::vector<double> intervals;
+  for (std::size_t i = 1; i < t.size(); ++i) intervals.push_back(t[i] - t[i - 1]);
+  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
+  const double median = intervals[intervals.size() / 2];
+  if (median > kFrameIntervalFactor * set.dt || median < set.dt / kFrameIntervalFactor)
+    throw InputError(fmt::format("{}: the frame_times are {} s apart (median) but dt = {} s; give frame_times in "
+                                 "seconds (not milliseconds or frame numbers) and dt = 1 / frame rate",
+                                 where, median, set.dt));
+}
+
 // Cameras and patterns; the file names of all frames must be distinct across cameras.
 void check_cameras(const std::vector<DepthCamera>& cameras, const std::vector<std::string>& patterns,
                    int frame_count, const std::string& where) {
@@ -170,6 +204,7 @@ void check_depth_noise(const DepthNoise& n, const std::string& where) {
 void validate_with_patterns(const ObservationSet& set, const std::vector<std::string>& patterns,
                             const std::string& where) {
   check_scalars(set.dt, set.depth_scale, set.first_frame_time, set.frame_count, set.cameras.size(), where);
+  check_frame_times(set, where);
   check_cameras(set.cameras, patterns, set.frame_count, where);
   if (!set.depth_noise.empty() && set.depth_noise.size() != set.cameras.size())
     throw InputError(fmt::format("{}: {} depth noise models for {} cameras; give one per camera or none", where,
@@ -233,6 +268,7 @@ void write_header(const fs::path& folder, const ObservationSet& set, const std::
   j["depth_scale"] = set.depth_scale;
   j["frame_count"] = set.frame_count;
   j["first_frame_time"] = set.first_frame_time;
+  if (!set.frame_times.empty()) j["frame_times"] = set.frame_times;
   const bool shared = shared_depth_noise(set);
   if (shared) j["depth_noise"] = depth_noise_json(*set.depth_noise[0]);
   j["cameras"] = nlohmann::ordered_json::array();
@@ -377,13 +413,23 @@ DepthNoise parse_depth_noise(const Json& j, const std::string& file, const std::
 // Everything of cameras.json; the images are read by read_frames.
 ObservationSet parse_header(const Json& j, const std::string& file) {
   check_format(j, file);
-  warn_unknown_keys(j, {"format", "dt", "depth_scale", "frame_count", "first_frame_time", "depth_noise", "cameras"},
-                    file, "");
+  warn_unknown_keys(j, {"format", "dt", "depth_scale", "frame_count", "first_frame_time", "frame_times", "depth_noise",
+                       "cameras"}, file, "");
   ObservationSet set;
   set.dt = get_number(j, "dt", file, "");
   set.depth_scale = get_number(j, "depth_scale", file, "");
   set.frame_count = get_int(j, "frame_count", file, "");
-  set.first_frame_time = j.contains("first_frame_time") ? get_number(j, "first_frame_time", file, "") : 0.0;
+  if (j.contains("frame_times")) {
+    const Json& times = j["frame_times"];
+    if (!times.is_array() || times.empty())
+      throw InputError(fmt::format("{}: key 'frame_times' must be an array of times in seconds, one per frame, got {}",
+                                   file, times.dump()));
+    for (std::size_t f = 0; f < times.size(); ++f)
+      set.frame_times.push_back(as_number(times[f], file, fmt::format("frame_times[{}]", f)));
+  }
+  set.first_frame_time = j.contains("first_frame_time") ? get_number(j, "first_frame_time", file, "")
+                         : set.frame_times.empty()      ? 0.0
+                                                        : set.frame_times[0];
   std::optional<DepthNoise> shared_noise;
   if (j.contains("depth_noise")) shared_noise = parse_depth_noise(j["depth_noise"], file, "depth_noise");
   const Json& cams = get_key(j, "cameras", file, "");
@@ -402,6 +448,7 @@ ObservationSet parse_header(const Json& j, const std::string& file) {
   }
   if (!any_noise) set.depth_noise.clear();
   check_scalars(set.dt, set.depth_scale, set.first_frame_time, set.frame_count, set.cameras.size(), file);
+  check_frame_times(set, file);
   check_cameras(set.cameras, set.depth_patterns, set.frame_count, file);
   return set;
 }
@@ -412,7 +459,8 @@ DepthImage read_frame(const ObservationSet& set, const fs::path& folder, int f, 
   std::error_code ec;
   if (!fs::exists(png, ec))
     throw InputError(fmt::format("{}: frame {} of {} is missing: {} does not exist ({} says frame_count = {}); "
-                                 "provide the file or lower frame_count",
+                                 "provide the file or lower frame_count (for frames the recording dropped, number the files "
+                                 "0..N-1 and give each file's time in frame_times)",
                                  folder.string(), f, camera_label(set, i), png.string(), json_file,
                                  set.frame_count));
   DepthImage image = read_depth_png(png.string(), set.depth_scale);
@@ -434,6 +482,10 @@ void read_frames(ObservationSet& set, const fs::path& folder, const std::string&
 const DepthNoise* camera_depth_noise(const ObservationSet& set, int camera) {
   if (camera < 0 || size_t(camera) >= set.depth_noise.size() || !set.depth_noise[size_t(camera)]) return nullptr;
   return &*set.depth_noise[size_t(camera)];
+}
+
+double frame_time(const ObservationSet& set, int frame) {
+  return set.frame_times.empty() ? set.first_frame_time + frame * set.dt : set.frame_times.at(std::size_t(frame));
 }
 
 std::string default_depth_pattern(int camera) { return fmt::format("cam{}/depth_%04d.png", camera); }

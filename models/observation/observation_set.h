@@ -3,11 +3,13 @@
 // On disk it is a folder (docs/observation-format.md):
 //
 //   DIR/cameras.json                    format "ssc-depth-v1", dt, depth_scale, frame_count,
-//                                       first_frame_time, cameras[] (intrinsics, pose, depth
+//                                       first_frame_time, optional frame_times and
+//                                       depth_noise, cameras[] (intrinsics, pose, depth
 //                                       range, depth_pattern, optional depth_noise)
 //   DIR/<depth_pattern % frame>         one 16-bit depth PNG per camera per frame
 //
-// Frame f was taken at time first_frame_time + f * dt; what that time means for a
+// Frame f was taken at time frame_times[f] when the folder lists them (so a dropped frame is
+// a gap, not a renumbering), else at first_frame_time + f * dt; what that time means for a
 // simulation is the caller's business. The reader checks everything it loads and throws
 // InputError with the offending path and the fix; the writer never leaves a half-written
 // folder behind.
@@ -42,6 +44,7 @@ struct ObservationSet {
   double depth_scale = 0.001;     // metres per PNG unit
   double first_frame_time = 0;    // seconds, time of frame 0
   int frame_count = 0;
+  std::vector<double> frame_times;  // seconds, one per frame, strictly increasing; empty: regular
   std::vector<DepthCamera> cameras;
   std::vector<std::string> depth_patterns;         // per camera, relative to the folder
   std::vector<std::vector<DepthImage>> frames;     // frames[f][camera]
@@ -50,6 +53,8 @@ struct ObservationSet {
 
 // The noise model of `camera`, or null when cameras.json gives none.
 const DepthNoise* camera_depth_noise(const ObservationSet& set, int camera);
+// Time of frame f in seconds: frame_times[f], or first_frame_time + f * dt without them.
+double frame_time(const ObservationSet& set, int frame);
 
 // "cam<i>/depth_%04d.png", the pattern write_observations uses for camera i when
 // depth_patterns is empty.
@@ -61,9 +66,10 @@ std::string default_depth_pattern(int camera);
 std::string depth_file_name(const std::string& pattern, int frame, const std::string& where = "depth_pattern");
 
 // Checks sizes and contents of an in-memory set (what write_observations will write):
-// dt > 0, depth_scale > 0, frame_count >= 1 matching frames, one image per camera per frame
-// with the camera's size, valid cameras and patterns (distinct files), every depth 0 or in
-// [min_depth, max_depth]. Throws InputError naming `where`.
+// dt > 0, depth_scale > 0, frame_count >= 1 matching frames, frame_times (if any) one per
+// frame, strictly increasing and spaced about dt apart, depth_noise (if any) >= 0, one image
+// per camera per frame with the camera's size, valid cameras and patterns (distinct files),
+// every depth 0 or in [min_depth, max_depth]. Throws InputError naming `where`.
 void validate_observations(const ObservationSet& set, const std::string& where);
 
 // Writes the set into `dir` as an ssc output folder (models/io/output_dir.h): atomically,

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <filesystem>
 
 #include "runtime/errors.h"
 #include "models/io/json_reader.h"
@@ -95,6 +96,7 @@ ObservationSet render_observations(const Scene& scene, const SimGrid& grid, cons
     for (size_t c = 0; c < spec.cameras.size(); ++c)
       images.push_back(render_depth(spec.cameras[c], bvh, spec.noise, mix_seed(spec.seed, std::uint64_t(f), c)));
     set.frames.push_back(std::move(images));
+    set.frame_times.push_back(f * spec.every * scene.time.dt);
     if (progress) progress(f + 1, frames);
   }
   set.frame_count = frames;
@@ -102,18 +104,49 @@ ObservationSet render_observations(const Scene& scene, const SimGrid& grid, cons
   return set;
 }
 
+namespace {
+
+// The step of a frame with a time of its own (cameras.json frame_times): the nearest one,
+// within kFrameTimeStepTolerance steps; two frames may not share a step.
+int step_of_frame_time(const ObservationSet& set, int f, double sim_dt, int previous, const std::string& file) {
+  const double t = set.frame_times[std::size_t(f)];
+  const double steps = t / sim_dt;
+  const double rounded = std::round(steps);
+  if (rounded < 0)
+    throw InputError(fmt::format("{}: frame_times[{}] = {} s is before the simulation starts (t = 0); the times are "
+                                 "measured from the start of the simulated motion", file, f, t));
+  if (std::abs(steps - rounded) > kFrameTimeStepTolerance)
+    throw InputError(fmt::format(
+        "{}: frame_times[{}] = {} s lies {:.3g} steps from the nearest simulation step (t = {} s with the scene's "
+        "time.dt = {} s; at most {} of a step is allowed); choose time.dt so that the frame times fall on steps, or "
+        "round frame_times to multiples of it",
+        file, f, t, std::abs(steps - rounded), rounded * sim_dt, sim_dt, kFrameTimeStepTolerance));
+  if (int(rounded) == previous)
+    throw InputError(fmt::format("{}: frame_times[{}] = {} s and frame_times[{}] = {} s fall on the same simulation "
+                                 "step (time.dt = {} s); lower the scene's time.dt",
+                                 file, f - 1, set.frame_times[std::size_t(f - 1)], f, t, sim_dt));
+  return int(rounded);
+}
+
+}  // namespace
+
 std::vector<ObservedFrame> observed_frames(const ObservationSet& set, double sim_dt, const std::string& dir) {
   std::vector<ObservedFrame> frames;
+  const std::string file = (std::filesystem::path(dir) / "cameras.json").string();
   for (int f = 0; f < set.frame_count; ++f) {
-    const double t = set.first_frame_time + f * set.dt;
-    const double steps = t / sim_dt;
-    const double rounded = std::round(steps);
-    if (std::abs(steps - rounded) > 1e-6 * std::max(1.0, steps))
-      throw InputError(fmt::format("{}: frame {} is at t = {} s, which is not a multiple of the scene's time.dt = {} s; "
-                                   "set time.dt so that the camera's frame interval dt = {} s is a whole number of steps",
-                                   dir, f, t, sim_dt, set.dt));
     ObservedFrame frame;
-    frame.step = int(rounded);
+    if (!set.frame_times.empty()) {
+      frame.step = step_of_frame_time(set, f, sim_dt, f > 0 ? frames.back().step : -1, file);
+    } else {
+      const double t = frame_time(set, f);
+      const double steps = t / sim_dt;
+      const double rounded = std::round(steps);
+      if (std::abs(steps - rounded) > 1e-6 * std::max(1.0, steps))
+        throw InputError(fmt::format("{}: frame {} is at t = {} s, which is not a multiple of the scene's time.dt = {} s; "
+                                     "set time.dt so that the camera's frame interval dt = {} s is a whole number of steps",
+                                     dir, f, t, sim_dt, set.dt));
+      frame.step = int(rounded);
+    }
     frame.points = observed_points(set, f);
     frames.push_back(std::move(frame));
   }

@@ -28,7 +28,8 @@ struct ObservationSpec {
 // Parses scene.extra["observation"]; InputError naming the scene and key.
 ObservationSpec parse_observation_spec(const Scene& scene);
 
-// Simulates the scene and renders every camera at every observed step.
+// Simulates the scene and renders every camera at every observed step; the set lists the
+// frames' times (frame_times) and the noise (depth_noise).
 // `configure` may place the simulation on a device before it runs; `finished` sees it
 // after the last step (for the run's warnings).
 ObservationSet render_observations(const Scene& scene, const SimGrid& grid, const ObservationSpec& spec,
@@ -36,9 +37,14 @@ ObservationSet render_observations(const Scene& scene, const SimGrid& grid, cons
                                    const std::function<void(Simulation&)>& configure = {},
                                    const std::function<void(const Simulation&)>& finished = {});
 
-// Observed world points per frame, each mapped to the simulation step it shows;
-// InputError (naming dir) if the frame times do not fall on simulation steps or a frame
-// has no point at all.
+// How far (in steps) a frame's own time (cameras.json frame_times) may lie from the
+// simulation step it is compared with: timestamps written with a few digits, not jitter.
+constexpr double kFrameTimeStepTolerance = 0.01;
+
+// Observed world points per frame, each mapped to the simulation step it shows: the step
+// nearest its frame_times entry, or (without frame_times) the step at first_frame_time +
+// f * dt, which must be exact. InputError (naming dir, cameras.json and the key) if a time is
+// negative or off the steps, two frames share a step, or no frame has a point at all.
 std::vector<ObservedFrame> observed_frames(const ObservationSet& set, double sim_dt, const std::string& dir);
 
 }  // namespace ssc

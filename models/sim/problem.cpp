@@ -4,6 +4,7 @@
 #include "models/sim/body.h"
 #include "models/sim/extensions.h"
 #include "models/sim/observation_setup.h"
+#include "models/sim/plane_points.h"
 
 namespace ssc {
 
@@ -16,6 +17,7 @@ Problem load_problem(const std::string& scene_path, const std::vector<std::strin
   p.grid = build_body_grid(p.scene);
   p.observations = read_observations(observation_dir);
   p.frames = observed_frames(p.observations, p.scene.time.dt, observation_dir);
+  check_table_points(p.frames, p.scene.planes, p.observations, observation_dir);
   for (const ObservedFrame& f : p.frames) p.scene.time.steps = std::max(p.scene.time.steps, f.step);
   p.phi_max = phi_max_override;
   if (p.phi_max <= 0 && p.scene.extra.contains("observation")) p.phi_max = parse_observation_spec(p.scene).phi_max;

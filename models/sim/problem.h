@@ -19,6 +19,8 @@ struct Problem {
   double phi_max = 0;  // metres
 };
 
+// The observed points are checked against the scene's ground planes (models/sim/plane_points.h:
+// a table left in the depth is a warning or an InputError).
 // phi_max: the override if > 0, else the scene's observation.phi_max, else 2 cell sizes.
 // The scene's time.steps is raised if the observations reach further. `parameters` are the
 // ones the command fits, sweeps or differentiates: the scene models every effect they belong

@@ -113,7 +113,9 @@ def missing.cameras-json 2 'cameras.json' 'observation folder without cameras.js
   'obs; rm obs/cameras.json; fixture ball.json' "$GRAD"
 def missing.depth-png 2 'depth_0002.png' 'one depth PNG of a frame missing' \
   'obs; rm obs/cam0/depth_0002.png; fixture ball.json' "$GRAD"
-def missing.frames 2 'depth_0005.png' 'cameras.json promises 9 frames, the folder has 5' \
+def missing.frames 2 'depth_0005.png && frame_times' 'cameras.json (without frame_times) promises 9 frames, the folder has 5' \
+  'obs; edit obs/cameras.json "\"frame_count\": 5" "\"frame_count\": 9" "\"frame_times\"" "\"unused_times\""; fixture ball.json' "$GRAD"
+def missing.frame-times 2 'cameras.json && frame_times has 5 entries && frame_count = 9' 'cameras.json promises 9 frames and lists 5 frame_times' \
   'obs; edit obs/cameras.json "\"frame_count\": 5" "\"frame_count\": 9"; fixture ball.json' "$GRAD"
 def folder.scene 2 'scene.json && folder' 'scene path is a folder' \
   'mkdir scene.json' "$SIM"
@@ -181,8 +183,8 @@ def cameras.non-rigid 2 'camera_to_world' 'camera_to_world with a rotation scale
   'obs; edit obs/cameras.json "-1.0," "-2.0," "        1.0,
         0.0," "        2.0,
         0.0,"; fixture ball.json' "$GRAD"
-def cameras.frame-times 2 'dt' 'observed frames between simulation steps (dt 0.03 against time.dt 0.02)' \
-  'obs; edit obs/cameras.json "\"dt\": 0.02" "\"dt\": 0.03"; fixture ball.json' "$GRAD"
+def cameras.frame-times 2 'dt' 'a folder without frame_times whose frames fall between simulation steps (dt 0.03 against time.dt 0.02)' \
+  'obs; edit obs/cameras.json "\"dt\": 0.02" "\"dt\": 0.03" "\"frame_times\"" "\"unused_times\""; fixture ball.json' "$GRAD"
 def cameras.missing-key 2 'cameras[0].fx' 'camera without fx' \
   'obs; edit obs/cameras.json "\"fx\":" "\"focal\":"; fixture ball.json' "$GRAD"
 def cameras.depth-noise 2 'depth_noise.along && ray' 'depth noise model along an unknown direction ("along": "normal")' \
@@ -191,6 +193,10 @@ def cameras.depth-range 2 'depth_0000.png && max_depth' 'depths beyond the camer
   'obs; edit obs/cameras.json "\"max_depth\": 3.0" "\"max_depth\": 0.5"; fixture ball.json' "$GRAD"
 def cameras.pattern-escape 2 'depth_pattern' 'depth_pattern that leaves the folder (../)' \
   'obs; edit obs/cameras.json "cam0/depth_" "../cam0/depth_"; fixture ball.json' "$GRAD"
+def cameras.frame-times-order 2 'cameras.json && frame_times[2] && increase strictly' 'frame_times not increasing (the third frame at 0.01 s, before the second at 0.02 s)' \
+  'obs; edit obs/cameras.json "0.04," "0.01,"; fixture ball.json' "$GRAD"
+def cameras.frame-times-off-step 2 'cameras.json && frame_times[2] && time.dt' 'a frame time between two simulation steps (0.05 s against time.dt 0.02 s)' \
+  'obs; edit obs/cameras.json "0.04," "0.05,"; fixture ball.json' "$GRAD"
 def scene.no-observation 2 'observation' 'observe a scene without an observation section' \
   'fixture mesh.json cube.obj' 'ssc observe mesh.json --out out'
 
@@ -251,6 +257,11 @@ def body.coarse-torus-3 2 'too coarse && grid.resolution' 'thin torus on a grid 
   'scene torus.json scene.json "\"resolution\": 30" "\"resolution\": 3"' "$SIM"
 def body.coarse-torus-2 2 'scene.json && grid.resolution' 'thin torus on a grid of resolution 2' \
   'scene torus.json scene.json "\"resolution\": 30" "\"resolution\": 2"' "$SIM"
+def body.resting-start 0 'warning && ground plane 0 && thrown off && ground.planes[0].height' 'sphere placed on the ground (the soft-min contact pushes before touching): a warning with the distance it will move and the plane height of a resting start, recorded in summary.json' \
+  'scene ball.json scene.json "\"position\": [0, 0.15, 0]" "\"position\": [0, 0.1, 0]"' 'ssc simulate scene.json --out out --no-frames && grep -q resting_start out/summary.json || { echo "catalogue: no resting_start warning in out/summary.json" >&2; exit 98; }' writes
+def match.table 2 'ground.planes[0] && the table && segment the body' 'depth of a table patch on the ground plane left in (a resting flat box whose top is the plane, rendered with ssc observe)' \
+  'fixture ball.json; ssc observe ball.json --out table --set ground.enabled=false --set gravity=[0,0,0] --set grid={\"cell_size\":0.01} --set "object={\"primitive\": \"box\", \"half_extents\": [0.12, 0.02, 0.12], \"position\": [0, -0.02, 0]}" >/dev/null 2>&1' \
+  'ssc gradient ball.json --observations table --params youngs_modulus'
 def match.far-away 2 'observed points' 'observations of the ball, scene moved 5 m aside (no point matches)' \
   'obs; fixture ball.json' 'ssc gradient ball.json --observations obs --set object.position=[5,0.15,0]'
 def match.flipped-camera 2 'observed points' 'camera pose in OpenGL convention (looks away from the body)' \
