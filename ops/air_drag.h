@@ -115,7 +115,7 @@ inline OpSpec air_drag_spec() {
   s.domain = Domain::Node;
   s.slots = {in("air_drag"), in("v_prev"), in("rotation", Access::Gather), optional_in("damping_in"),
              out("drag_force"), out("damping")};
-  s.scratch = {{"corner", Domain::Cell, 24}, {"red", Domain::Cell, 1}};
+  s.scratch = {{"corner", Domain::Cell, 24, ""}, {"red", Domain::Cell, 1, ""}};
   s.forward = {part("air_drag", Extent::Node, SSC_PART(air_drag_node),
                     {"air_drag", "v_prev", "rotation^", "#cell_rest_normal", "#cell_surface_weights",
                      "#node_cell_offset", "#node_cell_entry", "damping_in", "drag_force", "damping"})};

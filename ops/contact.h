@@ -181,7 +181,7 @@ inline OpSpec contact_force_spec() {
   s.domain = Domain::Point;
   s.slots = {in("u_prev", Access::Gather), in("v_prev", Access::Gather), in("ground_planes"), constant_in("dt"),
              constant_in("theta"), out("point_force")};
-  s.scratch = {{"xbar", Domain::Point, 3}, {"vbar", Domain::Point, 3}, {"planebar", Domain::Point, 0, "ground_planes"}};
+  s.scratch = {{"xbar", Domain::Point, 3, ""}, {"vbar", Domain::Point, 3, ""}, {"planebar", Domain::Point, 0, "ground_planes"}};
   s.forward = {part("contact_force", Extent::Point, SSC_PART(contact_force_point),
                     {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "u_prev^", "v_prev^", "ground_planes", "dt",
                      "theta", "point_force"})};

@@ -223,9 +223,9 @@ inline OpSpec contact_implicit_spec() {
              optional_in("point_force_in"), optional_in("damping_in", Access::Gather),
              optional_in("force_in", Access::Gather), constant_in("dt"), out("point_force"), out("damping"),
              out("node_force")};
-  s.scratch = {{"pstiff", Domain::Point, 6},
-               {"kbar", Domain::Node, 6},
-               {"xbar", Domain::Point, 3},
+  s.scratch = {{"pstiff", Domain::Point, 6, ""},
+               {"kbar", Domain::Node, 6, ""},
+               {"xbar", Domain::Point, 3, ""},
                {"planebar", Domain::Point, 0, "ground_planes"}};
   s.forward = {part("contact_implicit", Extent::Point, SSC_PART(contact_implicit_point),
                     {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "guess^", "ground_planes",

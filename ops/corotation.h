@@ -147,7 +147,7 @@ inline OpSpec corotation_spec() {
   s.domain = Domain::Cell;
   s.slots = {in("u_prev", Access::Gather), out("rotation"), out("polar_status")};
   s.slots.back().differentiable = false;
-  s.scratch = {{"corner", Domain::Cell, 24}};
+  s.scratch = {{"corner", Domain::Cell, 24, ""}};
   s.forward = {part("corotation", Extent::Cell, SSC_PART(corotation_cell),
                     {"u_prev^", "#cell_nodes", "rotation", "polar_status"})};
   s.adjoint = {part("corotation", Extent::Cell, SSC_ADJOINT_PART(adj_corotation_cell),
@@ -176,7 +176,7 @@ inline OpSpec stiffness_apply_spec() {
   s.name = "stiffness_apply";
   s.domain = Domain::Cell;
   s.slots = {in("rotation"), in("lambda"), in("mu"), in("u_prev", Access::Gather), out("ku_corner")};
-  s.scratch = {{"corner", Domain::Cell, 24}};
+  s.scratch = {{"corner", Domain::Cell, 24, ""}};
   s.forward = {part("stiffness_apply", Extent::Cell, SSC_PART(stiffness_apply_cell),
                     {"rotation", "#cell_weights", "lambda", "mu", "u_prev^", "#cell_nodes", "ku_corner"})};
   s.adjoint = {part("stiffness_apply", Extent::Cell, SSC_ADJOINT_PART(adj_stiffness_apply_cell),

@@ -264,7 +264,7 @@ inline OpSpec lame_spec() {
   s.name = "lame";
   s.domain = Domain::Cell;
   s.slots = {in("youngs_modulus"), optional_in("cell_youngs"), in("poisson_ratio"), out("lambda"), out("mu")};
-  s.scratch = {{"red", Domain::Cell, 2}};
+  s.scratch = {{"red", Domain::Cell, 2, ""}};
   s.forward = {part("lame", Extent::Cell, SSC_PART(lame_cell),
                     {"youngs_modulus", "cell_youngs", "poisson_ratio", "lambda", "mu"})};
   s.adjoint = {part("lame", Extent::Cell, SSC_ADJOINT_PART(adj_lame_cell),

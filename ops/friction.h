@@ -164,9 +164,9 @@ inline OpSpec friction_spec() {
   s.domain = Domain::Point;
   s.slots = {in("u_prev", Access::Gather), in("v_prev", Access::Gather), in("ground_planes"), in("friction"),
              optional_in("contact_force"), out("point_force"), out("damping")};
-  s.scratch = {{"pdamp", Domain::Point, 6},
-               {"xbar", Domain::Point, 3},
-               {"vbar", Domain::Point, 3},
+  s.scratch = {{"pdamp", Domain::Point, 6, ""},
+               {"xbar", Domain::Point, 3, ""},
+               {"vbar", Domain::Point, 3, ""},
                {"planebar", Domain::Point, 0, "ground_planes"},
                {"frictionbar", Domain::Point, 0, "friction"}};
   s.forward = {part("friction", Extent::Point, SSC_PART(friction_point),

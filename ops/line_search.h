@@ -146,7 +146,7 @@ inline OpSpec line_search_spec() {
              constant_in("stiffness_damping"),        out("sums")};
   s.slots[7].differentiable = false;
   s.slots.back().differentiable = false;
-  s.scratch = {{"cell_q", Domain::Cell, 1}, {"node_q", Domain::Node, 1}, {"point_terms", Domain::Point, 1 + kLineSearchSteps}};
+  s.scratch = {{"cell_q", Domain::Cell, 1, ""}, {"node_q", Domain::Node, 1, ""}, {"point_terms", Domain::Point, 1 + kLineSearchSteps, ""}};
   s.forward = {part("line_search_cells", Extent::Cell, SSC_PART(line_search_cell),
                     {"dt", "theta", "mass_damping", "stiffness_damping", "rotation", "#cell_weights", "lambda", "mu",
                      "guess^", "u_full^", "fixed^", "#cell_nodes", "$cell_q"}),

@@ -229,7 +229,7 @@ inline OpSpec neo_hookean_system_spec() {
   s.name = "neo_hookean_system";
   s.domain = Domain::Cell;
   s.slots = {in("u_theta", Access::Gather), in("lambda"), in("mu"), out("lambda_system"), out("mu_system")};
-  s.scratch = {{"corner", Domain::Cell, 24}};
+  s.scratch = {{"corner", Domain::Cell, 24, ""}};
   s.forward = {part("neo_hookean_system", Extent::Cell, SSC_PART(neo_hookean_system_cell),
                     {"u_theta^", "#cell_nodes", "lambda", "mu", "lambda_system", "mu_system"})};
   s.adjoint = {part("neo_hookean_system", Extent::Cell, SSC_ADJOINT_PART(adj_neo_hookean_system_cell),
@@ -287,7 +287,7 @@ inline OpSpec neo_hookean_correction_spec() {
   s.domain = Domain::Cell;
   s.slots = {in("u_theta", Access::Gather), in("rotation"), in("lambda"), in("mu"), in("lambda_system"),
              in("mu_system"), out("corner_force")};
-  s.scratch = {{"corner", Domain::Cell, 24}};
+  s.scratch = {{"corner", Domain::Cell, 24, ""}};
   s.forward = {part("neo_hookean_correction", Extent::Cell, SSC_PART(neo_hookean_correction_cell),
                     {"u_theta^", "#cell_nodes", "rotation", "#cell_weights", "lambda", "mu", "lambda_system",
                      "mu_system", "corner_force"})};

@@ -281,7 +281,7 @@ inline OpSpec newmark_rhs_spec() {
   s.slots = {in("ku_corner", Access::Gather), in("mass"), in("u_prev"), in("v_prev"), in("force"),
              optional_in("damping"), constant_in("dt"), constant_in("theta"), in("mass_damping"),
              in("stiffness_damping"), out("rhs")};
-  s.scratch = {{"red", Domain::Node, 2}};
+  s.scratch = {{"red", Domain::Node, 2, ""}};
   s.forward = {part("newmark_rhs", Extent::Node, SSC_PART(newmark_rhs_node),
                     {"dt", "theta", "mass_damping", "stiffness_damping", "ku_corner^", "#node_cell_offset",
                      "#node_cell_entry", "mass", "u_prev", "v_prev", "force", "damping", "rhs"})};
@@ -312,7 +312,7 @@ inline OpSpec newmark_solve_spec() {
              SlotSpec{"guess", false, Access::Opaque, true, false}, constant_in("dt"),
              constant_in("theta"), in("mass_damping"), in("stiffness_damping"), out("u"), out("cg_iterations")};
   s.slots.back().differentiable = false;
-  s.scratch = {{"w", Domain::Node, 3}, {"ku", Domain::Cell, 24}, {"red", Domain::Node, 2}};
+  s.scratch = {{"w", Domain::Node, 3, ""}, {"ku", Domain::Cell, 24, ""}, {"red", Domain::Node, 2, ""}};
   s.adjoint = {part("newmark_solve_rhs", Extent::Node, SSC_ADJOINT_PART(adj_newmark_solve_rhs), {"$w", "d_rhs"}),
                part("newmark_solve_cells", Extent::Cell, SSC_ADJOINT_PART(adj_newmark_solve_cell),
                     {"dt", "theta", "mass_damping", "stiffness_damping", "rotation", "#cell_weights", "#cell_nodes",

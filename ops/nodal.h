@@ -104,7 +104,7 @@ inline OpSpec node_mass_spec() {
   s.name = "node_mass";
   s.domain = Domain::Node;
   s.slots = {in("density"), out("mass")};
-  s.scratch = {{"red", Domain::Node, 1}};
+  s.scratch = {{"red", Domain::Node, 1, ""}};
   s.forward = {part("node_mass", Extent::Node, SSC_PART(node_mass_node), {"density", "#node_volume", "mass"})};
   s.adjoint = {part("node_mass", Extent::Node, SSC_ADJOINT_PART(adj_node_mass_node), {"d_mass", "#node_volume", "$red"}),
                reduction("node_mass_reduce", {"$red"}, {"d_density"})};
@@ -117,7 +117,7 @@ inline OpSpec node_force_spec() {
   s.domain = Domain::Node;
   s.slots = {in("corner_force", Access::Gather), optional_in("point_force", Access::Gather), optional_in("body_force"),
              in("mass"), in("gravity"), out("force")};
-  s.scratch = {{"red", Domain::Node, 3}};
+  s.scratch = {{"red", Domain::Node, 3, ""}};
   s.forward = {part("node_force", Extent::Node, SSC_PART(node_force_node),
                     {"corner_force^", "#node_cell_offset", "#node_cell_entry", "point_force^", "#point_t",
                      "#node_point_offset", "#node_point_entry", "body_force", "mass", "gravity", "force"})};

@@ -57,9 +57,9 @@ inline OpSpec stiffness_field_spec() {
   s.name = "stiffness_field";
   s.domain = Domain::Cell;
   s.slots = {in("youngs_modulus"), optional_in("region_youngs"), optional_in("stiffness_gradient"), out("cell_youngs")};
-  s.scratch = {{"red", Domain::Cell, 1},
+  s.scratch = {{"red", Domain::Cell, 1, ""},
                {"regionbar", Domain::Cell, 0, "region_youngs"},
-               {"gradientbar", Domain::Cell, 3}};
+               {"gradientbar", Domain::Cell, 3, ""}};
   s.forward = {part("stiffness_field", Extent::Cell, SSC_PART(stiffness_field_cell),
                     {"youngs_modulus", "region_youngs", "stiffness_gradient", "#cell_region", "#cell_offset",
                      "cell_youngs"})};

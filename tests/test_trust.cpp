@@ -4,13 +4,17 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "expect_input_error.h"
 #include "models/io/output_dir.h"
+#include "models/io/text_file.h"
 #include "models/io/run_record.h"
 #include "models/optim/reconstruction.h"
 #include "models/sim/body.h"
@@ -167,6 +171,53 @@ TEST(OutputFolder, InterruptCleanupRemovesUnfinishedFolders) {
   remove_unfinished_outputs();
   EXPECT_FALSE(fs::exists(out.path()));
   EXPECT_FALSE(fs::exists(box / ".run.ssc-lock"));
+}
+
+// What `ssc simulate` does when interrupted: the clean-up runs while the command is still
+// adding frames. Nothing of the output may be left, however the two interleave.
+TEST(OutputFolder, InterruptCleanupWhileTheCommandWritesLeavesNothing) {
+  Sandbox box;
+  for (int trial = 0; trial < 40; ++trial) {
+    OutputDir out(box / "run");
+    std::atomic<bool> started{false}, stop{false};
+    std::thread writer([&] {
+      try {
+        const std::string frames = out.make_folder("frames");
+        for (int f = 0; !stop; ++f) {
+          write_text_file(frames + "/frame_" + std::to_string(f) + ".ply", std::string(2000, 'x'));
+          started = true;
+        }
+      } catch (const InputError&) {  // the folder is gone: the write fails
+      }
+    });
+    while (!started) std::this_thread::yield();
+    std::this_thread::sleep_for(std::chrono::microseconds(200 * (trial % 5)));
+    remove_unfinished_outputs();
+    stop = true;
+    writer.join();
+    std::vector<std::string> left;
+    for (const auto& e : fs::directory_iterator(box.path)) left.push_back(e.path().filename().string());
+    ASSERT_TRUE(left.empty()) << "trial " << trial << ": " << left.front() << " was left";
+  }
+}
+
+TEST(RunRecord, HeldWarningsArePrintedOnceAtTheEnd) {
+  clear_warnings();
+  hold_warnings();
+  testing::internal::CaptureStderr();
+  warn("first", "the first warning");
+  warn("second", "the second warning");
+  warn("first", "the first warning");  // recorded once
+  const std::string while_running = testing::internal::GetCapturedStderr();
+  testing::internal::CaptureStderr();
+  print_held_warnings();
+  print_held_warnings();  // nothing new
+  const std::string at_end = testing::internal::GetCapturedStderr();
+  hold_warnings(false);
+  EXPECT_EQ(while_running, "");
+  EXPECT_EQ(at_end, "ssc: warning: the first warning\nssc: warning: the second warning\n");
+  EXPECT_EQ(warnings_json().size(), 2u);
+  clear_warnings();
 }
 
 json falling_box(double stiffness, double alpha, double dt) {

@@ -17,10 +17,13 @@
 #include <optional>
 #include <algorithm>
 #include <set>
+#include <thread>
+#include <chrono>
 
 #include "runtime/errors.h"
 #include "models/io/run_record.h"
 #include "models/io/text_file.h"
+#include "models/io/write_error.h"
 
 namespace ssc {
 namespace fs = std::filesystem;
@@ -119,22 +122,27 @@ void check_target(const std::string& target, const fs::path& given, const fs::pa
   if (const char* home = std::getenv("HOME"); home && *home && t == absolute_normal(home)) refuse(target, "is your home folder");
   const fs::path cwd = fs::current_path(ec);
   if (!ec && is_same_or_parent(t, absolute_normal(cwd.string()))) refuse(target, "is the working folder or one of its parents");
-  for (const std::string& input : protected_inputs)
-    if (!input.empty() && is_same_or_parent(t, absolute_normal(input))) refuse(target, fmt::format("holds the input {}", input));
+  for (const std::string& input : protected_inputs) {
+    if (input.empty()) continue;
+    const fs::path in = absolute_normal(input);
+    if (is_same_or_parent(t, in)) refuse(target, fmt::format("holds the input {}", input));
+    if (fs::is_directory(in, ec) && is_same_or_parent(in, t))
+      refuse(target, fmt::format("is inside the input folder {} (the run would add its output to what it reads)", input));
+  }
   if (const std::string why = why_not_replaceable(t); !why.empty()) refuse(target, why);
 }
 
 bool process_alive(long pid) { return pid > 0 && (::kill(pid_t(pid), 0) == 0 || errno == EPERM); }
 
-// Removes .NAME.ssc-tmp-PID and .NAME.ssc-old-PID left by a process of this host that no
-// longer runs: only folders whose manifest names that process and host.
+// Removes .NAME.ssc-tmp-PID, .NAME.ssc-old-PID and .NAME.ssc-del-PID left by a process of
+// this host that no longer runs: only folders whose manifest names that process and host.
 void remove_stale_siblings(const fs::path& t) {
   std::error_code ec;
   const std::string name = t.filename().string();
   const std::string host = host_name();
   for (auto it = fs::directory_iterator(t.parent_path(), ec); !ec && it != fs::directory_iterator(); it.increment(ec)) {
     const std::string n = it->path().filename().string();
-    for (const char* tag : {".ssc-tmp-", ".ssc-old-"}) {
+    for (const char* tag : {".ssc-tmp-", ".ssc-old-", ".ssc-del-"}) {
       const std::string prefix = "." + name + tag;
       if (n.rfind(prefix, 0) != 0) continue;
       char* end = nullptr;
@@ -161,13 +169,29 @@ bool exchange(const fs::path& a, const fs::path& b) {
 
 bool is_ssc_output(const std::string& folder) { return read_manifest(folder).has_value(); }
 
-void remove_unfinished_outputs() {
-  std::lock_guard<std::mutex> lock(registry_mutex);
+void remove_unfinished_outputs(bool hold_until_exit) {
+  registry_mutex.lock();
   for (const std::string& p : unfinished) {
     std::error_code ec;
-    fs::remove_all(p, ec);
+    if (!fs::is_directory(fs::symlink_status(p, ec))) {
+      fs::remove(p, ec);  // a lock file
+      continue;
+    }
+    // The writer may still be adding files: move the folder away in one step, so that its
+    // next write fails (its path is gone) instead of landing in a folder being removed.
+    std::string aside = p;
+    const size_t tag = aside.rfind(".ssc-tmp-");
+    aside = tag == std::string::npos ? aside + ".ssc-del" : aside.replace(tag, 9, ".ssc-del-");
+    fs::rename(p, aside, ec);
+    const fs::path gone = ec ? fs::path(p) : fs::path(aside);
+    // A file whose creation was under way during the rename may still appear: try again.
+    for (int attempt = 0; attempt < 200 && fs::exists(fs::symlink_status(gone, ec)); ++attempt) {
+      if (attempt > 0) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      fs::remove_all(gone, ec);
+    }
   }
   unfinished.clear();
+  if (!hold_until_exit) registry_mutex.unlock();  // else never: no OutputDir finishes any more
 }
 
 OutputDir::OutputDir(const std::string& target, const std::vector<std::string>& protected_inputs) : target_(target) {
@@ -225,6 +249,20 @@ void OutputDir::release() {
 }
 
 std::string OutputDir::file(const std::string& relative) const { return (fs::path(temp_) / relative).string(); }
+
+std::string OutputDir::make_folder(const std::string& relative) const {
+  create_folders_below(temp_, relative);
+  return file(relative);
+}
+
+void create_folders_below(const std::string& folder, const std::string& relative) {
+  fs::path p(folder);
+  for (const fs::path& part : fs::path(relative).lexically_normal()) {
+    p /= part;
+    std::error_code ec;
+    if (!fs::create_directory(p, ec) && ec) throw_write_error(p.string(), ec.value(), "create the folder");
+  }
+}
 
 void OutputDir::write_manifest(const std::string& status) const {
   nlohmann::json j = run_provenance();

@@ -16,7 +16,11 @@
 // removed at the end. A .NAME.ssc-tmp-PID or .NAME.ssc-old-PID whose manifest names a
 // process of this host that no longer runs is removed by the next run for the same target.
 // Interruption: every unfinished temporary folder and lock is registered, and
-// remove_unfinished_outputs() (called on SIGINT/SIGTERM, tools/ssc/interrupts.h) removes them.
+// remove_unfinished_outputs() (called on SIGINT/SIGTERM, tools/ssc/interrupts.h)
+// removes them while the command may still be writing: each folder is first renamed to
+// .NAME.ssc-del-PID, so that the writer's next file fails instead of landing in it, and is
+// then removed; no OutputDir finishes afterwards. Subfolders are made with make_folder (one
+// level at a time), which cannot bring back a folder that was moved away.
 #pragma once
 #include <nlohmann/json.hpp>
 #include <string>
@@ -34,6 +38,8 @@ class OutputDir {
 
   const std::string& path() const { return temp_; }  // write here
   std::string file(const std::string& relative) const;
+  // Creates the subfolder (and those between) and returns its path, like file().
+  std::string make_folder(const std::string& relative) const;
   // What the command adds to ssc.json (scene, observations, device, warnings, ...).
   nlohmann::json& manifest() { return manifest_; }
   void commit();
@@ -51,8 +57,14 @@ class OutputDir {
 inline constexpr const char* kManifestName = "ssc.json";
 bool is_ssc_output(const std::string& folder);
 
-// Removes every temporary folder and lock that a running OutputDir holds. Safe to call from
-// the signal-handling thread while the main thread is still writing.
-void remove_unfinished_outputs();
+// Creates folder/relative one level at a time below `folder`, which must exist (so a folder
+// removed meanwhile is not made again); an input/output error naming the path otherwise.
+void create_folders_below(const std::string& folder, const std::string& relative);
+
+// Removes every temporary folder and lock that a running OutputDir holds, also while another
+// thread is still writing into them. hold_until_exit: and keep every OutputDir from finishing
+// (committing, releasing) afterwards, for the signal-handling thread right before it ends the
+// process.
+void remove_unfinished_outputs(bool hold_until_exit = false);
 
 }  // namespace ssc

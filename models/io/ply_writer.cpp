@@ -10,6 +10,8 @@
 #include <stdexcept>
 #include <unistd.h>
 
+#include "models/io/write_error.h"
+
 namespace ssc {
 namespace {
 
@@ -54,8 +56,7 @@ void check_indices(const std::vector<Eigen::Vector3d>& vertices,
 [[noreturn]] void fail(const std::string& what, const std::string& path, int err,
                        const std::string& tmp) {
   std::remove(tmp.c_str());
-  throw std::runtime_error("write_ply: cannot " + what + " '" + path + "': " +
-                           std::strerror(err));
+  throw_write_error(path, err, what);
 }
 
 }  // namespace
@@ -68,7 +69,7 @@ void write_ply(const std::string& path, const std::vector<Eigen::Vector3d>& vert
   std::FILE* file = std::fopen(tmp.c_str(), "wb");
   if (!file) {
     const int err = errno;
-    fail("create the temporary file for", path, err, tmp);
+    fail("create its temporary file", path, err, tmp);
   }
   errno = 0;
   const bool wrote =
@@ -76,15 +77,15 @@ void write_ply(const std::string& path, const std::vector<Eigen::Vector3d>& vert
   if (!wrote) {
     const int err = errno != 0 ? errno : EIO;
     std::fclose(file);
-    fail("write", path, err, tmp);
+    fail("write the file", path, err, tmp);
   }
   if (std::fclose(file) != 0) {
     const int err = errno;
-    fail("close the temporary file for", path, err, tmp);
+    fail("finish writing its temporary file", path, err, tmp);
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     const int err = errno;
-    fail("rename the temporary file to", path, err, tmp);
+    fail("move its temporary file into place", path, err, tmp);
   }
 }
 

@@ -16,6 +16,10 @@ std::mutex mutex;
 std::vector<std::string> command_line;
 std::string started;
 std::vector<Warning> recorded;
+bool held = false;
+size_t printed = 0;  // recorded[0, printed) are on stderr
+
+void print(const Warning& w) { std::fprintf(stderr, "ssc: warning: %s\n", w.message.c_str()); }
 }  // namespace
 
 std::string utc_time_now() {
@@ -45,13 +49,24 @@ nlohmann::json run_provenance() {
 }
 
 void warn(const std::string& code, const std::string& message) {
-  {
-    std::lock_guard<std::mutex> lock(mutex);
-    for (const Warning& w : recorded)
-      if (w.code == code && w.message == message) return;
-    recorded.push_back({code, message});
-  }
-  std::fprintf(stderr, "ssc: warning: %s\n", message.c_str());
+  std::lock_guard<std::mutex> lock(mutex);
+  for (const Warning& w : recorded)
+    if (w.code == code && w.message == message) return;
+  recorded.push_back({code, message});
+  if (held) return;
+  print(recorded.back());
+  printed = recorded.size();
+}
+
+void hold_warnings(bool hold) {
+  std::lock_guard<std::mutex> lock(mutex);
+  held = hold;
+}
+
+void print_held_warnings() {
+  std::lock_guard<std::mutex> lock(mutex);
+  for (; printed < recorded.size(); ++printed) print(recorded[printed]);
+  std::fflush(stderr);
 }
 
 const std::vector<Warning>& warnings() { return recorded; }
@@ -66,6 +81,7 @@ nlohmann::json warnings_json() {
 void clear_warnings() {
   std::lock_guard<std::mutex> lock(mutex);
   recorded.clear();
+  printed = 0;
 }
 
 }  // namespace ssc

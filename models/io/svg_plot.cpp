@@ -5,11 +5,13 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <limits>
 
+#include "models/io/text_file.h"
+#include "models/io/write_error.h"
 #include "runtime/errors.h"
 
 namespace ssc {
@@ -153,17 +155,16 @@ std::string svg_plot_string(const std::vector<PlotPanel>& panels, int width, int
 void write_svg_plot(const std::string& path, const std::vector<PlotPanel>& panels, int width, int panel_height) {
   const std::string svg = svg_plot_string(panels, width, panel_height);
   const std::string temp = fmt::format("{}.tmp-{}", path, getpid());
-  {
-    std::ofstream f(temp);
-    f << svg;
-    if (!f) {
-      std::remove(temp.c_str());
-      throw InputError(fmt::format("{}: cannot write the plot", path));
-    }
+  try {
+    write_text_file(temp, svg);
+  } catch (const InputError&) {
+    std::remove(temp.c_str());
+    throw;
   }
   if (std::rename(temp.c_str(), path.c_str()) != 0) {
+    const int err = errno;
     std::remove(temp.c_str());
-    throw InputError(fmt::format("{}: cannot move the plot into place", path));
+    throw_write_error(path, err, "move the plot into place");
   }
 }
 

@@ -1,4 +1,5 @@
-// Writes a whole text file and checks that it reached the disk; InputError naming the file.
+// Writes a whole text file and checks that it reached the disk; an input/output error naming
+// the file and the reason otherwise (write_error.h).
 #pragma once
 #include <string>
 

@@ -18,11 +18,14 @@
 #include <cstring>
 #include <fmt/format.h>
 
+#include "models/io/write_error.h"
 #include "runtime/errors.h"
 
 namespace ssc {
 
 namespace {
+
+constexpr png_uint_32 kMaxDepthImageSide = 16384;  // pixels; real depth sensors stay far below
 
 constexpr const char* kFixHint =
     "depth images must be 16-bit single-channel grayscale PNGs (value * depth_scale = metres)";
@@ -183,9 +186,7 @@ void write_png_file(const std::string& file_path, const std::string& shown_path,
                     std::vector<png_byte>& bytes) {
   PngWriteState s;
   s.file = std::fopen(file_path.c_str(), "wb");
-  if (!s.file)
-    throw InputError(fmt::format("{}: cannot create file ({}); check that the folder exists and is "
-                                 "writable", shown_path, std::strerror(errno)));
+  if (!s.file) throw_write_error(shown_path, errno, "create the file");
   s.png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &s.error, on_png_error, on_png_warning);
   if (s.png) s.info = png_create_info_struct(s.png);
   if (!s.png || !s.info) throw InputError(fmt::format("{}: libpng could not allocate a writer", shown_path));
@@ -195,9 +196,7 @@ void write_png_file(const std::string& file_path, const std::string& shown_path,
     throw InputError(fmt::format("{}: writing the PNG failed (libpng: {})", shown_path, s.error.message));
   std::FILE* file = s.file;
   s.file = nullptr;
-  if (std::fclose(file) != 0)
-    throw InputError(fmt::format("{}: writing the PNG failed ({}); check free disk space", shown_path,
-                                 std::strerror(errno)));
+  if (std::fclose(file) != 0) throw_write_error(shown_path, errno);
 }
 
 }  // namespace
@@ -224,7 +223,7 @@ void write_depth_png(const std::string& path, const DepthImage& image, double de
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     const int err = errno;
     std::remove(tmp.c_str());
-    throw InputError(fmt::format("{}: cannot move the written PNG into place ({})", path, std::strerror(err)));
+    throw_write_error(path, err, "move the written PNG into place");
   }
 }
 
@@ -233,6 +232,15 @@ DepthImage read_depth_png(const std::string& path, double depth_scale) {
   PngReadState s;
   open_for_reading(s, path);
   if (!read_header(&s)) read_failure(path, s.error);
+  // The size from the header, before any pixel memory is taken (16-bit rows and metres).
+  const png_uint_32 header_width = png_get_image_width(s.png, s.info);
+  const png_uint_32 header_height = png_get_image_height(s.png, s.info);
+  if (header_width > kMaxDepthImageSide || header_height > kMaxDepthImageSide)
+    throw InputError(fmt::format("{}: the PNG is {} x {} pixels (from its header), too large for a depth image: ssc reads "
+                                 "at most {} pixels a side (this one would take {:.1f} GB of memory). Check that it is "
+                                 "the right file, or downscale it (and its camera's fx, fy, cx, cy in cameras.json)",
+                                 path, header_width, header_height, kMaxDepthImageSide,
+                                 10.0 * double(header_width) * double(header_height) / 1e9));
   const int color_type = png_get_color_type(s.png, s.info);
   const int bit_depth = png_get_bit_depth(s.png, s.info);
   if (color_type != PNG_COLOR_TYPE_GRAY || bit_depth != 16)

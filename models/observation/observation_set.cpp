@@ -283,11 +283,9 @@ void write_header(const fs::path& folder, const ObservationSet& set, const std::
 void write_frames(const fs::path& folder, const ObservationSet& set, const std::vector<std::string>& patterns) {
   for (int f = 0; f < set.frame_count; ++f)
     for (std::size_t i = 0; i < set.cameras.size(); ++i) {
-      const fs::path file = folder / depth_file_name(patterns[i], f);
-      std::error_code ec;
-      fs::create_directories(file.parent_path(), ec);
-      if (ec) throw InputError(fmt::format("{}: cannot create folder ({})", file.parent_path().string(), ec.message()));
-      write_depth_png(file.string(), set.frames[f][i], set.depth_scale);
+      const fs::path relative = fs::path(depth_file_name(patterns[i], f));
+      if (relative.has_parent_path()) create_folders_below(folder.string(), relative.parent_path().string());
+      write_depth_png((folder / relative).string(), set.frames[f][i], set.depth_scale);
     }
 }
 
@@ -457,12 +455,22 @@ DepthImage read_frame(const ObservationSet& set, const fs::path& folder, int f, 
                       const std::string& json_file) {
   const fs::path png = folder / depth_file_name(set.depth_patterns[i], f);
   std::error_code ec;
-  if (!fs::exists(png, ec))
-    throw InputError(fmt::format("{}: frame {} of {} is missing: {} does not exist ({} says frame_count = {}); "
-                                 "provide the file or lower frame_count (for frames the recording dropped, number the files "
-                                 "0..N-1 and give each file's time in frame_times)",
-                                 folder.string(), f, camera_label(set, i), png.string(), json_file,
-                                 set.frame_count));
+  if (!fs::exists(png, ec)) {
+    int later = -1;  // a later frame of this camera that is there: f is a gap, not the end
+    for (int g = f + 1; g < set.frame_count && later < 0; ++g)
+      if (fs::exists(folder / depth_file_name(set.depth_patterns[i], g), ec)) later = g;
+    // Frame numbers are times (first_frame_time + f dt): a gap cannot be closed by renumbering.
+    const std::string fix =
+        later < 0 ? fmt::format("provide the file or lower frame_count to {} (for frames the recording dropped, number "
+                                 "the files on and give each file's time in frame_times)", f)
+                  : fmt::format("frame {} is there, so this is a gap: a frame without any measurement still needs its "
+                                "file; write an all-zero {}x{} 16-bit PNG there (0 = no reading). Lowering frame_count "
+                                "would drop every later frame",
+                                later, set.cameras[i].width, set.cameras[i].height);
+    throw InputError(fmt::format("{}: frame {} of {} is missing: {} does not exist ({} says frame_count = {}); {}",
+                                 folder.string(), f, camera_label(set, i), png.string(), json_file, set.frame_count,
+                                 fix));
+  }
   DepthImage image = read_depth_png(png.string(), set.depth_scale);
   const std::string cam_where = fmt::format("cameras[{}] of {}", i, json_file);
   check_image_size(image, set.cameras[i], png.string(), cam_where);

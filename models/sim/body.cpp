@@ -102,15 +102,35 @@ void assign_material_regions(const Scene& scene, SimGrid& grid) {
                                        scene.file, r));
 }
 
+// A mesh exported in millimetres reads as a body of tens of metres or more: said before the
+// grid is built, since what goes wrong then (a grid too large, a body inside the ground) does
+// not point at the unit.
+static void check_mesh_size(const Scene& scene, const TriangleMesh& mesh) {
+  if (mesh.vertices.empty()) return;
+  Eigen::Vector3d lo = mesh.vertices[0], hi = mesh.vertices[0];
+  for (const Eigen::Vector3d& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  const double extent = scene.object.transform.scale * (hi - lo).maxCoeff();
+  if (extent >= kMillimetreMeshExtent)
+    warn("mesh_size", fmt::format("{}: the body is {:.4g} m across (object.scale {}): a mesh in millimetres reads as "
+                                  "metres; if it is one, set object.scale to {:.4g} (scale 0.001?)",
+                                  scene.object.path, extent, scene.object.transform.scale,
+                                  0.001 * scene.object.transform.scale));
+}
+
 SimGrid build_body_grid(const Scene& scene) {
   const std::string source = scene.object.path.empty() ? scene.file + ": object" : scene.object.path;
+  TriangleMesh mesh;
+  if (scene.object.kind == ObjectSpec::Kind::Mesh) {
+    mesh = load_mesh(scene.object.path);
+    check_mesh_size(scene, mesh);
+  }
   SimGrid grid = build_sim_grid(build_rest_sdf(scene), scene.grid, source);
   assign_material_regions(scene, grid);
   double reference = 0;
   if (scene.object.kind == ObjectSpec::Kind::Primitive) reference = primitive_volume(scene.object.primitive);
   if (scene.object.kind == ObjectSpec::Kind::Mesh) {
     int boundary = 0;
-    reference = closed_mesh_volume(load_mesh(scene.object.path), scene.object.transform.scale, &boundary);
+    reference = closed_mesh_volume(mesh, scene.object.transform.scale, &boundary);
     if (boundary > 0)
       warn("open_mesh", fmt::format("{}: the mesh is open ({} edges belong to one face only); its inside is inferred from "
                                     "winding numbers, which fills small holes of a scan but guesses across large ones. "

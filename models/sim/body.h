@@ -13,6 +13,8 @@ constexpr int kGridBorderCells = 3;
 // for closed meshes; .sdf files have no other volume): more than kVolumeLossWarning off is a
 // warning, more than kVolumeLossError lost an InputError.
 constexpr double kVolumeLossWarning = 0.05, kVolumeLossError = 0.5;
+// A mesh body at least this many metres across is likely in millimetres: a warning.
+constexpr double kMillimetreMeshExtent = 10.0;
 
 SdfGrid build_rest_sdf(const Scene& scene);
 SimGrid build_body_grid(const Scene& scene);

@@ -21,8 +21,9 @@ struct Problem {
 
 // The observed points are checked against the scene's ground planes (models/sim/plane_points.h:
 // a table left in the depth is a warning or an InputError).
-// phi_max: the override if > 0, else the scene's observation.phi_max, else 2 cell sizes.
-// The scene's time.steps is raised if the observations reach further. `parameters` are the
+// phi_max: the override if > 0, else the scene's observation.phi_max, else 2 cell sizes (a
+// negative override is an error). The scene's time.steps is raised if the observations reach
+// further (a note says so); frames before t = 0 are left out (a warning says so). `parameters` are the
 // ones the command fits, sweeps or differentiates: the scene models every effect they belong
 // to (a friction coefficient turns friction on, at the scene's coefficient, 0 by default).
 Problem load_problem(const std::string& scene_path, const std::vector<std::string>& overrides,

@@ -111,7 +111,7 @@ def missing.observations 2 'nowhere' 'observation folder that does not exist' \
   'fixture ball.json' 'ssc gradient ball.json --observations nowhere'
 def missing.cameras-json 2 'cameras.json' 'observation folder without cameras.json' \
   'obs; rm obs/cameras.json; fixture ball.json' "$GRAD"
-def missing.depth-png 2 'depth_0002.png' 'one depth PNG of a frame missing' \
+def missing.depth-png 2 'depth_0002.png && all-zero' 'one depth PNG in the middle of the frames missing (a gap: the fix is an all-zero PNG, not a lower frame_count)' \
   'obs; rm obs/cam0/depth_0002.png; fixture ball.json' "$GRAD"
 def missing.frames 2 'depth_0005.png && frame_times' 'cameras.json (without frame_times) promises 9 frames, the folder has 5' \
   'obs; edit obs/cameras.json "\"frame_count\": 5" "\"frame_count\": 9" "\"frame_times\"" "\"unused_times\""; fixture ball.json' "$GRAD"
@@ -141,6 +141,8 @@ def mesh.obj-flat 2 'cube.obj' 'OBJ of one triangle (no volume)' \
   'fixture mesh.json; printf "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n" > cube.obj' 'ssc simulate mesh.json --out out'
 def mesh.obj-open 0 'warning && cube.obj && open' 'OBJ cube with three of its six faces missing: a warning that the mesh is open, recorded in summary.json' \
   'fixture mesh.json; head -n 15 "$FIX/cube.obj" > cube.obj' 'ssc simulate mesh.json --out out --no-frames && grep -q open_mesh out/summary.json || { echo "catalogue: no open_mesh warning in out/summary.json" >&2; exit 98; }' writes
+def mesh.millimetres 2 'cube.obj && 200 m across && scale 0.001?' 'mesh in millimetres (a 200 m cube): besides the error it causes, a warning asks "scale 0.001?"' \
+  'scene mesh.json mesh.json "\"scale\": 0.2" "\"scale\": 200"; fixture cube.obj' 'ssc simulate mesh.json --out out'
 def mesh.ply-truncated 2 'cube.ply' 'ASCII PLY cut off after 3 of 8 vertices' \
   'scene mesh.json mesh.json cube.obj cube.ply; head -n 12 "$FIX/cube.ply" > cube.ply' 'ssc simulate mesh.json --out out'
 def mesh.ply-garbage 2 'cube.ply' 'PLY file without a PLY header' \
@@ -173,6 +175,8 @@ def png.truncated 2 'depth_0001.png' 'depth PNG cut off after 100 bytes' \
   'obs; head -c 100 "$SHARED/obs/cam0/depth_0001.png" > obs/cam0/depth_0001.png; fixture ball.json' "$GRAD"
 def png.wrong-size 2 'depth_0000.png && width' 'cameras.json says 32 pixels wide, the PNGs are 16' \
   'obs; edit obs/cameras.json "\"width\": 16" "\"width\": 32"; fixture ball.json' "$GRAD"
+def png.huge 2 'depth_0001.png && 30000 x 30000' 'depth PNG whose header says 30000 x 30000 pixels (refused before any pixel memory is taken)' \
+  'obs; printf "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\x75\x30\x00\x00\x75\x30\x10\x00\x00\x00\x00\x13\xdc\x7b\x25\x00\x00\x00\x0c\x49\x44\x41\x54\x78\x9c\x63\x60\xa0\x3d\x00\x00\x00\x64\x00\x01\x86\x64\x3c\x35" > obs/cam0/depth_0001.png; fixture ball.json' "$GRAD"
 def cameras.malformed 2 'cameras.json' 'cameras.json cut off in the middle' \
   'obs; head -c 150 "$SHARED/obs/cameras.json" > obs/cameras.json; fixture ball.json' "$GRAD"
 def cameras.format 2 'format' 'cameras.json of an unknown format version' \
@@ -197,6 +201,13 @@ def cameras.frame-times-order 2 'cameras.json && frame_times[2] && increase stri
   'obs; edit obs/cameras.json "0.04," "0.01,"; fixture ball.json' "$GRAD"
 def cameras.frame-times-off-step 2 'cameras.json && frame_times[2] && time.dt' 'a frame time between two simulation steps (0.05 s against time.dt 0.02 s)' \
   'obs; edit obs/cameras.json "0.04," "0.05,"; fixture ball.json' "$GRAD"
+def cameras.before-start 0 'warning && before t = 0' 'first_frame_time -0.04 s: the two frames before the simulation starts are left out, with a warning (also in the JSON result)' \
+  'obs; edit obs/cameras.json "\"first_frame_time\": 0.0" "\"first_frame_time\": -0.04" "\"frame_times\"" "\"unused_times\""; fixture ball.json' \
+  'json=$(ssc gradient ball.json --observations obs --params youngs_modulus); rc=$?; grep -q frames_before_start <<<"$json" || { echo "catalogue: the JSON result has no frames_before_start warning" >&2; exit 98; }; exit $rc'
+def cameras.all-before-start 2 'obs && first_frame_time' 'first_frame_time -1 s: every frame before the simulation starts' \
+  'obs; edit obs/cameras.json "\"first_frame_time\": 0.0" "\"first_frame_time\": -1.0" "\"frame_times\"" "\"unused_times\""; fixture ball.json' "$GRAD"
+def note.steps-raised 0 'time.steps raised from 2 to 4' 'time.steps 2 while the observations reach step 4: raised, with a note' \
+  'obs; fixture ball.json' "$GRAD"' --set time.steps=2'
 def scene.no-observation 2 'observation' 'observe a scene without an observation section' \
   'fixture mesh.json cube.obj' 'ssc observe mesh.json --out out'
 
@@ -245,6 +256,14 @@ def param.sweep-baseline-truth 2 '--truth' 'sweep --cost disp without --truth' \
   'obs; fixture ball.json' 'ssc sweep ball.json --observations obs --param youngs_modulus=4000:6000:2 --cost disp --out out'
 def param.fit-fd-unknown 1 'gradient' 'reconstruct --gradient bogus' \
   'obs; fixture ball.json' 'ssc reconstruct ball.json --observations obs --fit youngs_modulus --gradient bogus --out out'
+def param.phi-max-negative 2 '--phi-max -1 && positive' '--phi-max -1' \
+  'obs; fixture ball.json' "$GRAD"' --phi-max -1'
+def param.sweep-too-many 2 '--param && 20000 && 10000' 'sweep of 20000 samples (the limit is 10000)' \
+  'obs; fixture ball.json' 'ssc sweep ball.json --observations obs --param youngs_modulus=4000:6000:20000 --out out'
+def diagnose.holdout-held-in 2 '--holdout 0.99 && 2 of the 5 && at least 3' 'diagnose --holdout 0.99 on 5 frames: 2 left to fit on' \
+  'obs; fixture ball.json' 'ssc diagnose ball.json --observations obs --holdout 0.99 --starts 1 --iterations 1 --out out'
+def diagnose.fit-candidate 2 '--fit ground.friction && candidate of the diagnosis' 'diagnose --fit ground.friction while friction is a candidate' \
+  'obs; fixture ball.json' 'ssc diagnose ball.json --observations obs --fit youngs_modulus,ground.friction --holdout 0.5 --starts 1 --iterations 1 --out out'
 def probe.syntax 2 '--probe' '--probe with two numbers' \
   'fixture ball.json' 'ssc simulate ball.json --out out --probe 0,0.15'
 def probe.outside 2 'probe' '--probe point outside the body' \
@@ -318,6 +337,8 @@ def out.observations 2 '--out obs && holds the input' 'sweep --out the observati
   'obs; fixture ball.json' 'ssc sweep ball.json --observations obs --param youngs_modulus=4000:6000:2 --out obs'
 def out.observations-parent 2 '--out runs && runs/obs' 'reconstruct --out a parent of the observation folder (an earlier ssc output)' \
   'fixture ball.json; ssc simulate ball.json --out runs --no-frames 2>/dev/null && obs runs/obs' 'ssc reconstruct ball.json --observations runs/obs --fit youngs_modulus --starts 1 --iterations 1 --out runs'
+def out.inside-observations 2 '--out obs/sweep && inside the input folder obs' 'sweep --out a folder inside the observation folder it reads' \
+  'obs; fixture ball.json' 'ssc sweep ball.json --observations obs --param youngs_modulus=4000:6000:2 --out obs/sweep'
 def out.locked 2 '--out out && another ssc run' 'a second run on an --out that a running ssc holds' \
   'fixture ball.json' 'set -m; ssc simulate ball.json --out out '"$SLOW"' 2>/dev/null & p=$!; track $p; wait_for .out.ssc-lock || exit 99; ssc simulate ball.json --out out; rc=$?; kill -TERM $p; wait $p; exit $rc'
 def signal.term 143 'SIGTERM' 'simulate stopped with SIGTERM: no OUT, no .OUT.ssc-tmp-PID, no .OUT.ssc-lock left' \
@@ -326,6 +347,18 @@ def signal.int 130 'SIGINT' 'simulate stopped with SIGINT (Ctrl-C): nothing left
   'fixture ball.json' 'set -m; ssc simulate ball.json --out out '"$SLOW"' & p=$!; track $p; wait_for .out.ssc-lock || exit 99; sleep 1; kill -INT $p; wait $p'
 def signal.term-replace 143 'SIGTERM' 'SIGTERM while replacing an earlier output: the earlier one stays as it was' \
   'fixture ball.json; ssc simulate ball.json --out out --no-frames 2>/dev/null' 'set -m; ssc simulate ball.json --out out '"$SLOW"' & p=$!; track $p; wait_for .out.ssc-tmp-$p || exit 99; sleep 0.5; kill -TERM $p; wait $p'
+def signal.int-while-writing 130 'SIGINT' 'simulate writing frames, stopped with SIGINT 25 times at varying moments: nothing left behind any time' \
+  'fixture ball.json' 'set -m; for i in $(seq 25); do ssc simulate ball.json --out out --set time.steps=1000000 2>/dev/null & p=$!; track $p; wait_for .out.ssc-tmp-$p/frames || exit 99; sleep 0.0$((i % 10)); kill -INT $p; wait $p; rc=$?; left=$(ls -A | grep -vx -e ball.json -e precious.txt); [[ $rc == 130 && -z $left ]] || { echo "catalogue: try $i: exit $rc, left: $left" >&2; exit 98; }; done; echo "interrupted by SIGINT 25 times, nothing left" >&2; exit 130'
+
+# ---- progress, notes and warnings on stderr ----
+def progress.quiet 0 '' 'residuals, kernels and gradient with --quiet (and an unknown key in cameras.json): nothing on stderr, the warning only in the JSON' \
+  'obs; edit obs/cameras.json "\"format\"" "\"colour\": \"red\", \"format\""; fixture ball.json' \
+  'for c in "residuals ball.json --observations obs --out res" "kernels ball.json --out ker --no-compile" "gradient ball.json --observations obs --params youngs_modulus"; do err=$(ssc $c --quiet 2>&1 >/dev/null) || { echo "catalogue: ssc $c --quiet failed: $err" >&2; exit 98; }; [[ -z $err ]] || { echo "catalogue: ssc $c --quiet printed: $err" >&2; exit 98; }; done; grep -q colour res/ssc.json || { echo "catalogue: no warning in res/ssc.json" >&2; exit 98; }' writes
+def progress.lines 0 'residuals: simulating && elapsed && finite differences: parameter 1/1' 'residuals and gradient --check-fd with --progress on a stderr that is not a terminal' \
+  'obs; fixture ball.json' 'ssc residuals ball.json --observations obs --out res --progress >/dev/null && ssc gradient ball.json --observations obs --params youngs_modulus --check-fd --progress >/dev/null' writes
+def warn.at-end 0 'warning && colour' 'a warning raised while loading is printed once, after the progress lines' \
+  'obs; edit obs/cameras.json "\"format\"" "\"colour\": \"red\", \"format\""; fixture ball.json' \
+  'err=$(ssc gradient ball.json --observations obs --params youngs_modulus --check-fd --progress 2>&1 >/dev/null); rc=$?; echo "$err" >&2; [[ $(grep -c colour <<<"$err") == 1 && $(tail -n 1 <<<"$err") == *colour* ]] || { echo "catalogue: the warning is not printed once, at the end" >&2; exit 98; }; exit $rc'
 
 # ---- GPU ----
 def gpu.simulate 4 'GPU error' 'simulate --device cuda without a GPU' \

@@ -5,6 +5,8 @@
 // the base fit and of the named extension's.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "models/diagnosis/diagnosis.h"
@@ -17,10 +19,12 @@
 #include "models/io/run_record.h"
 #include "models/io/text_file.h"
 #include "models/sim/parameters.h"
+#include "models/sim/problem.h"
 #include "runtime/cuda_runtime.h"
 #include "runtime/errors.h"
 #include "tools/ssc/commands.h"
 #include "tools/ssc/device_option.h"
+#include "tools/ssc/progress.h"
 
 namespace ssc {
 namespace {
@@ -52,6 +56,43 @@ nlohmann::json report_data(const Diagnosis& d, const nlohmann::json& dj, const s
   return data;
 }
 
+// The candidate whose own parameter `name` (canonical) is, "" for none: friction's
+// coefficients, the air drag, the stiffness gradient.
+std::string candidate_of(const std::string& name) {
+  const std::string friction = ".friction";
+  if (name.size() > friction.size() && name.compare(name.size() - friction.size(), friction.size(), friction) == 0)
+    return "friction";
+  if (name == "air_drag") return "air_drag";
+  if (name.rfind("material.stiffness_gradient", 0) == 0) return "heterogeneous_stiffness";
+  return "";
+}
+
+// What diagnose() would refuse only after its first fits, or accept and then trip over: a
+// base parameter that a candidate fits, and a split that leaves fewer than 3 frames held in
+// (counted as diagnose() counts them).
+void check_options(const std::string& scene, const std::vector<std::string>& overrides, const std::string& observations,
+                   double phi_max, const DiagnosisOptions& opt) {
+  const Problem problem = load_problem(scene, overrides, observations, phi_max, opt.fit);
+  for (const std::string& name : expand_parameter_names(opt.fit, PhysicalParameters::from_scene(problem.scene))) {
+    const std::string candidate = candidate_of(name);
+    if (!candidate.empty() && std::find(opt.candidates.begin(), opt.candidates.end(), candidate) != opt.candidates.end())
+      throw InputError(fmt::format("--fit {}: {} is a candidate of the diagnosis (--candidates), which fits {} itself "
+                                   "and measures what it adds to the base model, so it cannot also be a base "
+                                   "parameter; leave {} out of --fit, or leave {} out of --candidates to fit it in "
+                                   "the base model",
+                                   name, candidate, name, name, candidate));
+  }
+  if (!(opt.holdout > 0 && opt.holdout < 1)) return;  // diagnose() says what is wrong
+  const int n = int(problem.frames.size());
+  const int held_in = std::max(2, int(std::ceil((1 - opt.holdout) * n)));
+  if (held_in < 3)
+    throw InputError(fmt::format("{}: --holdout {} leaves {} of the {} observed frames to fit on; the fits need at least "
+                                 "3 (and 2 to hold out): {}",
+                                 observations, opt.holdout, held_in, n,
+                                 n >= 5 ? fmt::format("lower --holdout to at most {:.2f}", std::floor(100.0 * (1 - 3.0 / n)) / 100)
+                                        : std::string("observe at least 5 frames")));
+}
+
 }  // namespace
 
 Command register_diagnose(CLI::App& app) {
@@ -60,6 +101,7 @@ Command register_diagnose(CLI::App& app) {
     std::vector<std::string> overrides;
     DiagnosisOptions d;
     double phi_max = 0;
+    ProgressMode progress = ProgressMode::Auto;
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand("diagnose", "Name the effect the fitted model misses, fit it, measure the gain");
@@ -77,16 +119,21 @@ Command register_diagnose(CLI::App& app) {
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
   add_device_option(sub, &o->device);
+  add_progress_options(sub, &o->progress);
   return [o] {
     DiagnosisOptions opt = o->d;
+    check_options(o->scene, o->overrides, o->observations, o->phi_max, opt);
     opt.device = choose_device(o->device);
     OutputDir out(o->out, {o->scene, o->observations});
     out.manifest()["scene"] = {{"file", o->scene}};
     out.manifest()["observations"] = folder_fingerprint(o->observations);
     const std::string device = opt.device == "cuda" ? gpu_description() : "cpu";
     out.manifest()["device"] = device;
+    Progress progress("diagnose", 0, o->progress);
     const Diagnosis d = diagnose(o->scene, o->overrides, o->observations, o->phi_max, opt,
-                                 [](const std::string& what) { std::fprintf(stderr, "diagnose: %s\n", what.c_str()); });
+                                 [&](const std::string& what) { progress.stage(what); });
+    for (const CandidateVerdict& v : d.verdicts)  // recorded in diagnosis.json's candidates; printed at the end
+      for (const std::string& w : v.warnings) warn("candidate", v.name + ": " + w);
     nlohmann::json dj = diagnosis_json(d);
     dj["device"] = device;
     dj["options"] = {{"fit", opt.fit},           {"candidates", opt.candidates}, {"starts", opt.starts},

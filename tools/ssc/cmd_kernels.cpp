@@ -6,8 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
-#include <filesystem>
-#include <fstream>
+#include <thread>
 
 #include "codegen/cuda_source.h"
 #include "codegen/kernel_plan.h"
@@ -19,6 +18,7 @@
 #include "models/sim/timestep_graph.h"
 #include "runtime/nvrtc_compiler.h"
 #include "tools/ssc/commands.h"
+#include "tools/ssc/progress.h"
 
 namespace ssc {
 namespace {
@@ -27,10 +27,26 @@ struct KernelsOptions {
   std::string scene, out, arch = "sm_90", real = "double";
   std::vector<std::string> overrides;
   bool extension = true, no_compile = false, fmad = false;
+  ProgressMode progress = ProgressMode::Auto;
 };
 
+// Compiles in rounds of one kernel per thread, so that progress can be told between rounds.
+std::vector<CompiledKernel> compile_with_progress(const std::vector<KernelSource>& sources, const NvrtcOptions& no,
+                                                  ProgressMode mode) {
+  const size_t round = std::max(1u, std::thread::hardware_concurrency());
+  Progress progress("kernels: compiled", int(sources.size()), mode);
+  std::vector<CompiledKernel> compiled;
+  for (size_t begin = 0; begin < sources.size(); begin += round) {
+    const std::vector<KernelSource> some(sources.begin() + long(begin),
+                                         sources.begin() + long(std::min(sources.size(), begin + round)));
+    for (CompiledKernel& k : compile_kernels(some, no)) compiled.push_back(std::move(k));
+    progress.update(int(compiled.size()), compiled.back().name);
+  }
+  progress.finish();
+  return compiled;
+}
+
 int run_kernels(const KernelsOptions& o) {
-  namespace fs = std::filesystem;
   if (o.real != "double" && o.real != "float") throw InputError("--real must be float or double, not " + o.real);
   const Scene scene = load_scene(o.scene, o.overrides);
   OutputDir out(o.out, {o.scene, scene.object.path});
@@ -39,7 +55,7 @@ int run_kernels(const KernelsOptions& o) {
   out.manifest()["real"] = o.real;
   const TimestepGraph t = build_timestep_graph(int(scene.planes.size()), o.extension, timestep_model(scene));
   const KernelPlan plan = plan_kernels(t.graph);
-  fs::create_directories(fs::path(out.file("kernels")));
+  out.make_folder("kernels");
   write_text_file(out.file("graph.txt"), t.graph.describe());
   write_text_file(out.file("plan.txt"), plan.text(t.graph));
   const CodegenOptions co{o.real, 128};
@@ -64,7 +80,7 @@ int run_kernels(const KernelsOptions& o) {
   no.arch = o.arch;
   no.fmad = o.fmad;
   const auto start = std::chrono::steady_clock::now();
-  const std::vector<CompiledKernel> compiled = compile_kernels(sources, no);
+  const std::vector<CompiledKernel> compiled = compile_with_progress(sources, no, o.progress);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::string table = fmt::format("{:<58} {:>5} {:>6} {:>6} {:>7} {:>7} {:>9}\n", "kernel", "regs", "smem", "stack",
                                   "spill_s", "spill_l", "compile");
@@ -95,6 +111,7 @@ Command register_kernels(CLI::App& app) {
   sub->add_flag("--fmad", o->fmad, "Allow fused multiply-add contraction (default off)");
   sub->add_flag("--no-compile", o->no_compile, "Write plan and sources only");
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
+  add_progress_options(sub, &o->progress);
   return [o] { return run_kernels(*o); };
 }
 

@@ -22,6 +22,7 @@
 #include "tools/ssc/commands.h"
 #include "tools/ssc/device_option.h"
 #include "tools/ssc/fitted_parameters.h"
+#include "tools/ssc/progress.h"
 
 namespace ssc {
 namespace {
@@ -49,6 +50,7 @@ Command register_residuals(CLI::App& app) {
     std::vector<std::string> overrides;
     double phi_max = 0;
     std::string device = "auto";
+    ProgressMode progress = ProgressMode::Auto;
   };
   auto o = std::make_shared<Options>();
   CLI::App* sub = app.add_subcommand("residuals", "Where a fitted simulation disagrees with the observations");
@@ -59,7 +61,9 @@ Command register_residuals(CLI::App& app) {
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
   add_device_option(sub, &o->device);
+  add_progress_options(sub, &o->progress);
   return [o] {
+    Progress progress("residuals", 0, o->progress);
     const std::string device = choose_device(o->device);
     const FittedParameters fitted = read_fitted_parameters(o->params);
     std::vector<std::string> overrides = o->overrides;
@@ -70,7 +74,12 @@ Command register_residuals(CLI::App& app) {
     out.manifest()["observations"] = folder_fingerprint(o->observations);
     if (!o->params.empty()) out.manifest()["params"] = {{"file", o->params}, {"set", fitted.set}};
     out.manifest()["device"] = device == "cuda" ? gpu_description() : "cpu";
+    size_t points = 0;
+    for (const ObservedFrame& f : problem.frames) points += f.points.size();
+    progress.stage(fmt::format("simulating {} steps and measuring {} observed points of {} frames", problem.scene.time.steps,
+                               points, problem.frames.size()));
     const Residuals r = compute_residuals(problem, PhysicalParameters::from_scene(problem.scene), device);
+    progress.stage("writing the tables, the plot and report.html");
     nlohmann::json summary = residual_summary(r);
     const GoodnessOfFit fit = goodness_of_fit(problem, r);
     warn_if_above_noise(fit);

@@ -72,7 +72,7 @@ int run_simulate(const SimulateOptions& o) {
   const std::string device = place_simulation(sim, o.device);
   const DeformedSurface surface(grid);
   out.manifest()["device"] = device;
-  std::filesystem::create_directories(out.file("frames"));
+  out.make_folder("frames");
   note(fmt::format("{}: {} cells, {} nodes, {} band nodes, {} contact points, mass {:.4g} kg", scene.file, grid.cell_count,
                    grid.node_count, grid.band_count, grid.contact_points.size(), sim.total_mass()));
 

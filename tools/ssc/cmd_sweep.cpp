@@ -27,17 +27,28 @@ struct SweepRange {
   int count = 0;
 };
 
+constexpr long long kMaxSamples = 10000;  // each sample is a whole simulation and its adjoint
+
 SweepRange parse_range(const std::string& text) {
   SweepRange r;
   const size_t eq = text.find('=');
   char c1 = 0, c2 = 0;
+  long long count = 0;
+  int end = 0;
   if (eq != std::string::npos) {
     r.name = text.substr(0, eq);
-    if (std::sscanf(text.c_str() + eq + 1, "%lf%c%lf%c%d", &r.lo, &c1, &r.hi, &c2, &r.count) == 5 && c1 == ':' && c2 == ':' &&
-        r.count >= 2 && r.count <= 10000)
+    if (std::sscanf(text.c_str() + eq + 1, "%lf%c%lf%c%lld%n", &r.lo, &c1, &r.hi, &c2, &count, &end) == 5 && c1 == ':' &&
+        c2 == ':' && text[eq + 1 + size_t(end)] == 0 && count >= 2) {
+      if (count > kMaxSamples)
+        throw InputError(fmt::format("--param {}: N = {} samples is above the limit of {} (each sample is a whole "
+                                     "simulation and its adjoint); sample fewer points, or sweep a narrower range",
+                                     text, count, kMaxSamples));
+      r.count = int(count);
       return r;
+    }
   }
-  throw InputError(fmt::format("--param {}: expected NAME=LO:HI:N with N >= 2, e.g. youngs_modulus=1250:20000:31", text));
+  throw InputError(fmt::format("--param {}: expected NAME=LO:HI:N with 2 <= N <= {}, e.g. youngs_modulus=1250:20000:31",
+                               text, kMaxSamples));
 }
 
 }  // namespace

@@ -20,7 +20,7 @@ void handle_interrupts() {
   std::thread([set] {
     int sig = 0;
     if (sigwait(&set, &sig) != 0) return;
-    remove_unfinished_outputs();
+    remove_unfinished_outputs(/*hold_until_exit=*/true);  // the command may still be writing
     std::fprintf(stderr, "\nssc: interrupted by %s; removed the unfinished output\n", sig == SIGINT ? "SIGINT" : "SIGTERM");
     std::fflush(stderr);
     _exit(128 + sig);

@@ -4,9 +4,12 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <filesystem>
 
 #include "runtime/errors.h"
+#include "models/io/notes.h"
 #include "models/io/run_record.h"
+#include "models/io/write_error.h"
 #include "runtime/cuda_runtime.h"
 #include "runtime/nvrtc_compiler.h"
 #include "tools/ssc/commands.h"
@@ -14,9 +17,33 @@
 
 namespace {
 
-int report(const char* kind, const std::exception& e, int code) {
-  std::fprintf(stderr, "ssc: %s: %s\n", kind, e.what());
-  return code;
+// Runs the parsed command; an error becomes its message ("ssc: KIND: ...") and exit code.
+int run_command(const std::vector<std::pair<CLI::App*, ssc::Command>>& commands, std::string* error) {
+  auto fail = [error](const char* kind, const std::string& what, int code) {
+    *error = fmt::format("ssc: {}: {}", kind, what);
+    return code;
+  };
+  try {
+    for (auto& [sub, run] : commands)
+      if (sub->parsed()) return run();
+  } catch (const ssc::InputError& e) {
+    return fail("error", e.what(), ssc::kExitInput);
+  } catch (const ssc::SimulationError& e) {
+    return fail("simulation failed", e.what(), ssc::kExitSimulation);
+  } catch (const ssc::GpuError& e) {
+    return fail("GPU error", e.what(), ssc::kExitGpu);
+  } catch (const ssc::GpuUnavailable& e) {
+    return fail("GPU error", e.what(), ssc::kExitGpu);
+  } catch (const ssc::NvrtcError& e) {
+    return fail("kernel compilation failed (NVRTC)", e.what(), ssc::kExitGpu);
+  } catch (const std::filesystem::filesystem_error& e) {
+    return fail("error", ssc::filesystem_error_message(e), ssc::kExitInput);
+  } catch (const std::bad_alloc&) {
+    return fail("error", "out of memory; use a coarser grid, fewer starts or a shorter run", ssc::kExitInput);
+  } catch (const std::exception& e) {
+    return fail("internal error (please report it)", e.what(), ssc::kExitInternal);
+  }
+  return ssc::kExitUsage;
 }
 
 }  // namespace
@@ -68,24 +95,10 @@ int main(int argc, char** argv) {
     app.exit(e);  // prints the message and the usage
     return ssc::kExitUsage;
   }
-  try {
-    for (auto& [sub, run] : commands)
-      if (sub->parsed()) return run();
-  } catch (const ssc::InputError& e) {
-    return report("error", e, ssc::kExitInput);
-  } catch (const ssc::SimulationError& e) {
-    return report("simulation failed", e, ssc::kExitSimulation);
-  } catch (const ssc::GpuError& e) {
-    return report("GPU error", e, ssc::kExitGpu);
-  } catch (const ssc::GpuUnavailable& e) {
-    return report("GPU error", e, ssc::kExitGpu);
-  } catch (const ssc::NvrtcError& e) {
-    return report("kernel compilation failed (NVRTC)", e, ssc::kExitGpu);
-  } catch (const std::bad_alloc& e) {
-    std::fprintf(stderr, "ssc: error: out of memory; use a coarser grid, fewer starts or a shorter run\n");
-    return ssc::kExitInput;
-  } catch (const std::exception& e) {
-    return report("internal error (please report it)", e, ssc::kExitInternal);
-  }
-  return ssc::kExitUsage;
+  ssc::hold_warnings();  // printed together at the end, after any progress line
+  std::string error;
+  const int code = run_command(commands, &error);
+  if (!ssc::quiet()) ssc::print_held_warnings();
+  if (!error.empty()) std::fprintf(stderr, "%s\n", error.c_str());
+  return code;
 }

@@ -8,7 +8,6 @@
 
 namespace ssc {
 namespace {
-bool quiet_notes = false;
 
 std::string duration(double s) {
   if (s < 90) return fmt::format("{:.1f} s", s);
@@ -21,14 +20,9 @@ void add_progress_options(CLI::App* sub, ProgressMode* mode) {
   auto* lines = sub->add_flag_callback("--progress", [mode] { *mode = ProgressMode::Lines; },
                                        "Print a progress line per round on stderr, also when it is not a terminal");
   sub->add_flag_callback("--quiet", [mode] { *mode = ProgressMode::Quiet; set_quiet(true); },
-                         "No progress and no notes; only warnings, errors and the result")
+                         "No progress, notes or warnings on stderr (warnings stay in the output's JSON); only "
+                         "errors and the result")
       ->excludes(lines);
-}
-
-void set_quiet(bool quiet) { quiet_notes = quiet; }
-
-void note(const std::string& line) {
-  if (!quiet_notes) std::fprintf(stderr, "ssc: %s\n", line.c_str());
 }
 
 Progress::Progress(std::string label, int total, ProgressMode mode, double min_interval_s)
@@ -51,6 +45,13 @@ void Progress::update(int done, const std::string& detail) {
     last_line_s_ = s;
     std::fprintf(stderr, "%s\n", line.c_str());
   }
+  std::fflush(stderr);
+}
+
+void Progress::stage(const std::string& what) {
+  if (mode_ == ProgressMode::Quiet) return;
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  std::fprintf(stderr, "%s: %s (%s elapsed)\n", label_.c_str(), what.c_str(), duration(s).c_str());
   std::fflush(stderr);
 }
 
