@@ -5,13 +5,18 @@
 // velocity w = v - (n.v) n meets the force
 //   f = -mu N w / s,   s = sqrt(|w|^2 + eps^2),
 // of magnitude mu N |w| / s: Coulomb's mu N when sliding (|w| >> eps), a viscous mu N w / eps
-// below eps. Its velocity Jacobian df/dv = -C with
-//   C = mu N (P / s - w w^T / s^3),  P = I - n n^T,
-// symmetric positive semi-definite. The theta-scheme takes f(v) ~ f(v-) - C (v - v-) (the
-// first-order prediction, as the contact op does for the normal force), with C in the system
-// matrix (ops/newmark.h); C is lumped to the edge's nodes with the weights (1 - t, t) that
-// split the force. A body at rest on a slope with r = tan(slope) / mu < 1 then holds, creeping
-// at most at the speed where mu |w| / s = tan(slope): eps r / sqrt(1 - r^2).
+// below eps. The step takes it as the damper the start of the step gives,
+//   f(v) = -C w(v),  C = mu N P / s(v-),  P = I - n n^T,
+// i.e. f(v-) - C (v - v-) with C in the system matrix (ops/newmark.h), lumped to the edge's
+// nodes with the weights (1 - t, t) that split the force. It opposes the end-of-step sliding
+// velocity whatever the step does, so it never adds energy. (The velocity Jacobian
+// mu N (P / s - w w^T / s^3) instead makes the step explicit along w once |w| > eps: a node
+// whose friction impulse dt mu N / m exceeds its |w| then overshoots every step, and on a cube
+// on a slope the contact points went into a growing sideways chatter (period two steps,
+// 9 cm/s) that took the friction off the slope direction: at mu = 0.5 > tan 25 deg it crept
+// at 4.7 cm/s.) Steady sliding gets Coulomb's force exactly. A body at rest on a slope with
+// r = tan(slope) / mu < 1 holds, creeping at most at the speed where
+// mu |w| / s = tan(slope): eps r / sqrt(1 - r^2).
 //
 // The op takes the contact op's point forces and returns them with friction added, so that
 // node_force gathers one point force (without them, friction's own: the implicit contact op
@@ -37,22 +42,21 @@ SSC_HD inline void plane_friction(const GroundPlane<Real>& g, Real mu, Real eps,
   const Real q = mu * N;
   const Vec3<Real> w = v - dot(n, v) * n;
   const Real s = sqrt(dot(w, w) + eps * eps);
-  f += (-q / s) * w;
-  const Real a = q / s, b = q / (s * s * s);
-  C[0] += a * (Real(1) - n.x * n.x) - b * w.x * w.x;
-  C[1] += a * (Real(1) - n.y * n.y) - b * w.y * w.y;
-  C[2] += a * (Real(1) - n.z * n.z) - b * w.z * w.z;
-  C[3] += -a * n.x * n.y - b * w.x * w.y;
-  C[4] += -a * n.x * n.z - b * w.x * w.z;
-  C[5] += -a * n.y * n.z - b * w.y * w.z;
+  const Real a = q / s;
+  f += (-a) * w;
+  C[0] += a * (Real(1) - n.x * n.x);
+  C[1] += a * (Real(1) - n.y * n.y);
+  C[2] += a * (Real(1) - n.z * n.z);
+  C[3] += -a * n.x * n.y;
+  C[4] += -a * n.x * n.z;
+  C[5] += -a * n.y * n.z;
 }
 
 // Adjoint of plane_friction for the cotangents f_bar and C_bar (of the 6 stored values).
 // With G the symmetric matrix whose entries give <G, dC> = sum_k C_bar[k] dC[k] (the
-// off-diagonal ones C_bar / 2), q = mu N and GP = <G, P> = tr G - n.Gn:
-//   q_bar = GP / s - w.Gw / s^3 - f_bar.w / s,
-//   s_bar = q (3 w.Gw / s^4 - GP / s^2 + f_bar.w / s^2),
-//   w_bar = -2 q / s^3 G w - q / s f_bar + s_bar w / s,  n_bar = -2 q / s G n + (from w, d).
+// off-diagonal ones C_bar / 2), q = mu N and GP = <G, P> = tr G - n.Gn (C = q P / s, f = -q w / s):
+//   q_bar = (GP - f_bar.w) / s,  s_bar = q (f_bar.w - GP) / s^2,
+//   w_bar = -q / s f_bar + s_bar w / s,  n_bar = -2 q / s G n + (from w, d).
 template <class Real>
 SSC_HD inline void adj_plane_friction(const GroundPlane<Real>& g, Real mu, Real eps, Real area, Vec3<Real> x,
                                       Vec3<Real> v, Vec3<Real> f_bar, const Real* C_bar, Vec3<Real>& x_bar,
@@ -66,13 +70,12 @@ SSC_HD inline void adj_plane_friction(const GroundPlane<Real>& g, Real mu, Real 
   const Real nv = dot(n, v);
   const Vec3<Real> w = v - nv * n;
   const Real s = sqrt(dot(w, w) + eps * eps);
-  const Vec3<Real> Gw = sym3_cotangent_apply(C_bar, w), Gn = sym3_cotangent_apply(C_bar, n);
+  const Vec3<Real> Gn = sym3_cotangent_apply(C_bar, n);
   const Real GP = C_bar[0] + C_bar[1] + C_bar[2] - dot(n, Gn);
-  const Real wGw = dot(w, Gw), fw = dot(f_bar, w);
-  const Real s2 = s * s, s3 = s2 * s;
-  const Real q_bar = GP / s - wGw / s3 - fw / s;
-  const Real s_bar = q * (Real(3) * wGw / (s3 * s) - GP / s2 + fw / s2);
-  const Vec3<Real> w_bar = (Real(-2) * q / s3) * Gw + (-q / s) * f_bar + (s_bar / s) * w;
+  const Real fw = dot(f_bar, w);
+  const Real q_bar = (GP - fw) / s;
+  const Real s_bar = q * (fw - GP) / (s * s);
+  const Vec3<Real> w_bar = (-q / s) * f_bar + (s_bar / s) * w;
   Vec3<Real> n_bar = (Real(-2) * q / s) * Gn;
   eps_bar += s_bar * eps / s;
   const Real nw = dot(n, w_bar);
