@@ -152,7 +152,7 @@ TEST(OptimConvergence, QuadraticWithConditionNumber100) {
     if (name == "gd" || name == "lbfgs") {
       // These stop on ||g|| <= 1e-10, so |x - x*| <= ||g|| / lambda_min = 1e-10.
       // Measured: gd 1.9e-11 after 96 iterations, lbfgs 6.8e-12 after 38.
-      EXPECT_EQ(opt->stop_reason(), "gradient below tolerance") << name;
+      EXPECT_EQ(opt->stop_reason(), "converged: gradient") << name;
       EXPECT_LE(err, 1e-9) << name;
       EXPECT_LE(opt->iterations(), 150) << name;
     } else {
@@ -179,7 +179,7 @@ TEST(OptimConvergence, RosenbrockLbfgsReachesTheMinimumTo1e6) {
                 opt->iterations(), t.evaluations(), err, opt->stop_reason().c_str());
     EXPECT_LE(err, 1e-6);
     EXPECT_LE(opt->best_cost(), 1e-12);
-    EXPECT_EQ(opt->stop_reason(), "gradient below tolerance");
+    EXPECT_EQ(opt->stop_reason(), "converged: gradient");
   }
 }
 
@@ -201,7 +201,7 @@ TEST(OptimConvergence, RosenbrockGdAndRprop) {
                   opt->iterations(), err, opt->stop_reason().c_str());
       if (name == std::string("gd")) {
         EXPECT_LE(err, 1e-6) << name;
-        EXPECT_EQ(opt->stop_reason(), "gradient below tolerance");
+        EXPECT_EQ(opt->stop_reason(), "converged: gradient");
       } else {
         EXPECT_LE(err, 1e-3) << name;
         // The best point after 1000 iterations, from the trace.
@@ -232,10 +232,10 @@ TEST(OptimConvergence, OneDimensionalFunction) {
       EXPECT_NEAR(opt->best_cost(), 2 - 2 * std::log(2.0), 1e-7) << name;
       if (name == "gd" || name == "lbfgs") {
         EXPECT_LE(err, 1e-9) << name;
-        EXPECT_EQ(opt->stop_reason(), "gradient below tolerance") << name;
+        EXPECT_EQ(opt->stop_reason(), "converged: gradient") << name;
       } else {
         EXPECT_LE(err, 5e-4) << name;
-        EXPECT_EQ(opt->stop_reason(), "cost change below tolerance") << name;
+        EXPECT_EQ(opt->stop_reason(), "converged: relative cost change < tol") << name;
       }
     }
   }
@@ -272,7 +272,7 @@ TEST(OptimStopping, GradientTolerance) {
     o.gradient_tolerance = 1e-4;
     auto opt = make_optimizer(name, Vec::Zero(5), o);
     const Trace t = drive(*opt, q.f);
-    EXPECT_EQ(opt->stop_reason(), "gradient below tolerance") << name;
+    EXPECT_EQ(opt->stop_reason(), "converged: gradient") << name;
     // It stops at the first gradient below the tolerance (for L-BFGS: of an accepted point).
     EXPECT_LE(t.gradients.back().norm(), 1e-4) << name;
     for (int k = 0; k + 1 < t.evaluations(); ++k) {
@@ -288,7 +288,7 @@ TEST(OptimStopping, GradientTolerance) {
     auto opt = make_optimizer(name, q.c, OptimizerOptions{});
     const Trace t = drive(*opt, q.f);
     EXPECT_EQ(t.evaluations(), 1) << name;
-    EXPECT_EQ(opt->stop_reason(), "gradient below tolerance") << name;
+    EXPECT_EQ(opt->stop_reason(), "converged: gradient") << name;
     EXPECT_TRUE(bitwise_equal(opt->best_point(), q.c)) << name;
     EXPECT_EQ(opt->best_cost(), 0.0) << name;
   }
@@ -305,7 +305,7 @@ TEST(OptimStopping, StalledCost) {
     o.relative_tolerance = 1e-3;
     auto opt = make_optimizer(name, Vec::Zero(5), o);
     const Trace t = drive(*opt, q.f);
-    EXPECT_EQ(opt->stop_reason(), "cost change below tolerance") << name;
+    EXPECT_EQ(opt->stop_reason(), "converged: relative cost change < tol") << name;
     EXPECT_EQ(opt->iterations(), 4) << name;
     EXPECT_GT(t.gradients.back().norm(), 1.0) << name;
   }
@@ -324,7 +324,7 @@ TEST(OptimStopping, NonFiniteCostStopsAndIsNeverBest) {
     auto opt = make_optimizer(name, vec({1.0}), OptimizerOptions{});
     opt->tell(std::numeric_limits<double>::quiet_NaN(), vec({1.0}));
     EXPECT_TRUE(opt->done()) << name;
-    EXPECT_EQ(opt->stop_reason(), "non-finite cost") << name;
+    EXPECT_EQ(opt->stop_reason(), "failed: non-finite cost") << name;
     EXPECT_EQ(opt->best_cost(), 1e300) << name;  // a NaN is never the best
     EXPECT_EQ(opt->best_point().size(), 0) << name;
   }
@@ -436,7 +436,7 @@ TEST(OptimRules, BarzilaiBorweinStepSizes) {
 TEST(OptimRules, LbfgsFirstTrialAndFailedLineSearch) {
   // The first trial point is the start moved by gd_initial_step along -g. A cost that
   // only ever rises makes every trial fail Armijo: the step halves, and after 20
-  // rejected trials the run stops with "line search failed", the start being the best.
+  // rejected trials the run stops with "failed: line search", the start being the best.
   OptimizerOptions o;
   auto opt = make_optimizer("lbfgs", vec({1.0, 2.0}), o);
   EXPECT_TRUE(bitwise_equal(opt->ask(), vec({1.0, 2.0})));
@@ -451,7 +451,7 @@ TEST(OptimRules, LbfgsFirstTrialAndFailedLineSearch) {
     ++tells;
     trial_length *= 0.5;
   }
-  EXPECT_EQ(opt->stop_reason(), "line search failed");
+  EXPECT_EQ(opt->stop_reason(), "failed: line search");
   EXPECT_EQ(tells, 21);
   EXPECT_EQ(opt->best_cost(), 1.0);
   EXPECT_TRUE(bitwise_equal(opt->best_point(), vec({1.0, 2.0})));
@@ -1185,7 +1185,8 @@ TEST(ReconstructionFailures, ExplodingStartIsDroppedWithoutFailingTheOthers) {
   std::printf("failed start: %s\n", bad.failure.c_str());
   EXPECT_TRUE(bad.failed);
   EXPECT_NE(bad.failure.find("exploded"), std::string::npos) << bad.failure;
-  EXPECT_EQ(bad.stop_reason, "simulation failed");
+  EXPECT_EQ(bad.stop_reason, "failed: simulation");
+  EXPECT_FALSE(bad.converged);
   EXPECT_EQ(bad.final.size(), 0);
   EXPECT_TRUE(bad.cost_history.empty());
   EXPECT_TRUE(bitwise_equal(bad.initial, vec({1e-6})));
@@ -1262,6 +1263,127 @@ TEST(ReconstructionFailures, ALoneFailingStartIsReportedNotThrown) {
   EXPECT_EQ(r.best, -1);
 }
 
+// ---- Levenberg-Marquardt on the residuals (models/optim/levenberg_marquardt.h) ----------------
+
+TEST(ReconstructionLeastSquares, ConvergesToTheMinimumTheGradientOptimiserFinds) {
+  // The four sampled starts of RecoversYoungsModulusWithin2Percent (seed 1), lm with the
+  // default budget of `ssc reconstruct` runs (30 iterations): every start stops on a
+  // "converged: ..." reason, well within the budget, at the minimum of the cost that L-BFGS
+  // (adjoint gradients, converged on its gradient tolerance) finds from the nearest start. The
+  // history has one row per accepted point, its costs falling.
+  const Problem& problem = sphere_problem();
+  ReconstructionOptions o;
+  o.fit = {"youngs_modulus"};
+  o.starts = 4;
+  o.seed = 1;
+  o.optimizer = "lm";
+  o.optimizer_options.max_iterations = 30;
+  auto t0 = std::chrono::steady_clock::now();
+  const ReconstructionResult lm = reconstruct(problem, o);
+  const double lm_wall = seconds_since(t0);
+  ASSERT_EQ(lm.starts.size(), 4u);
+  o.optimizer = "lbfgs";
+  o.initial_values = {lm.starts[2].initial};
+  t0 = std::chrono::steady_clock::now();
+  const ReconstructionResult lbfgs = reconstruct(problem, o);
+  const double lbfgs_wall = seconds_since(t0);
+  ASSERT_GE(lm.best, 0);
+  const StartRecord& other = lbfgs.starts[0];
+  ASSERT_FALSE(other.failed) << other.failure;
+  ASSERT_EQ(other.stop_reason, "converged: gradient");
+  for (size_t s = 0; s < lm.starts.size(); ++s) {
+    const StartRecord& rec = lm.starts[s];
+    std::printf("start %zu: %8.1f Pa -> %9.3f Pa, cost %.10g, %d iterations (%s)\n", s, rec.initial[0], rec.final[0],
+                rec.final_cost, rec.iterations, rec.stop_reason.c_str());
+    ASSERT_FALSE(rec.failed) << rec.failure;
+    EXPECT_TRUE(rec.converged) << rec.stop_reason;
+    EXPECT_EQ(rec.stop_reason.rfind("converged: ", 0), 0u);
+    EXPECT_LE(rec.iterations, 15);
+    EXPECT_EQ(int(rec.cost_history.size()), rec.iterations + 1);
+    EXPECT_NEAR(rec.parameter_history[0][0], rec.initial[0], 1e-13 * rec.initial[0]);
+    for (size_t k = 1; k < rec.cost_history.size(); ++k) EXPECT_LT(rec.cost_history[k], rec.cost_history[k - 1]);
+    EXPECT_EQ(rec.final_cost, rec.cost_history.back());
+    EXPECT_NEAR(rec.final[0], other.final[0], 1e-4 * other.final[0]);
+    EXPECT_LE(rec.final_cost, other.final_cost * (1 + 1e-9));
+    EXPECT_GT(rec.matched_points, 0);
+  }
+  std::printf("lm: %d forward simulations, %.2f s; lbfgs from start 2: %.3f Pa, cost %.10g, %d iterations, %d "
+              "evaluations (forward and adjoint), %.2f s\n",
+              lm.evaluations, lm_wall, other.final[0], other.final_cost, other.iterations, lbfgs.evaluations, lbfgs_wall);
+  EXPECT_NEAR(lm.starts[size_t(lm.best)].final[0], kTrueYoungsModulus, 0.02 * kTrueYoungsModulus);
+}
+
+TEST(ReconstructionLeastSquares, BoundsHoldAndAStartOnABoundMoves) {
+  // E bounded to [1e4, 4e4] Pa (the truth, 2e4, inside): starts on both bounds begin 2 % of
+  // the log range inside them, and lm converges from both to one value near the truth (the
+  // noise moves the cost's minimum by about -0.4 %). Bounded to [5e3, 1.5e4] (the truth
+  // outside): no point recorded lies beyond the bounds, and lm ends at the upper one,
+  // converged. The other optimisers get the same bounded axis (one R-Prop round: its clamped start).
+  const Problem& problem = sphere_problem();
+  ReconstructionOptions o;
+  o.fit = {"youngs_modulus"};
+  o.optimizer = "lm";
+  o.optimizer_options.max_iterations = 30;
+  o.bounds["youngs_modulus"] = {1e4, 4e4};
+  o.initial_values = {vec({1e4}), vec({4e4})};
+  const ReconstructionResult inside = reconstruct(problem, o);
+  EXPECT_NEAR(inside.starts[0].initial[0], 1e4 * std::pow(4.0, 0.02), 1e-9 * 1e4);
+  EXPECT_NEAR(inside.starts[1].initial[0], 4e4 / std::pow(4.0, 0.02), 1e-9 * 4e4);
+  for (const StartRecord& rec : inside.starts) {
+    std::printf("bounds [1e4, 4e4]: %.1f Pa -> %.3f Pa, %d iterations (%s)\n", rec.initial[0], rec.final[0],
+                rec.iterations, rec.stop_reason.c_str());
+    ASSERT_FALSE(rec.failed) << rec.failure;
+    EXPECT_TRUE(rec.converged) << rec.stop_reason;
+    EXPECT_NEAR(rec.final[0], inside.starts[0].final[0], 1e-4 * rec.final[0]);
+    EXPECT_NEAR(rec.final[0], kTrueYoungsModulus, 0.02 * kTrueYoungsModulus);
+  }
+  o.bounds["youngs_modulus"] = {5e3, 1.5e4};
+  o.initial_values = {vec({1e4})};
+  const StartRecord outside = reconstruct(problem, o).starts[0];
+  ASSERT_FALSE(outside.failed) << outside.failure;
+  double lowest = 1e300, highest = 0;
+  for (const Vec& x : outside.parameter_history) lowest = std::min(lowest, x[0]), highest = std::max(highest, x[0]);
+  std::printf("bounds [5e3, 1.5e4]: 1e4 Pa -> %.3f Pa, %d iterations (%s), recorded %.3f .. %.3f Pa\n",
+              outside.final[0], outside.iterations, outside.stop_reason.c_str(), lowest, highest);
+  EXPECT_TRUE(outside.converged) << outside.stop_reason;
+  EXPECT_GE(lowest, 5e3);
+  EXPECT_LE(highest, 1.5e4);
+  EXPECT_GT(outside.final[0], 0.99 * 1.5e4);
+  o.optimizer = "rprop";
+  o.optimizer_options.max_iterations = 1;
+  o.initial_values = {vec({1.5e4})};
+  const StartRecord rprop = reconstruct(problem, o).starts[0];
+  EXPECT_NEAR(rprop.initial[0], 1.5e4 / std::pow(3.0, 0.02), 1e-9 * 1.5e4);
+  EXPECT_EQ(rprop.parameter_history[0][0], rprop.initial[0]);
+}
+
+TEST(ReconstructionLeastSquares, SampledStartsStayInsideTheBounds) {
+  // Positive E, nominal 5000: the usual range [500, 50000] cut by bounds [2000, 1e6] gives
+  // [2000 x m, 50000] (m = 500^0.02, the 2 % margin of the log range); bounds outside the usual
+  // range give the bounds less their margins; log-uniform in both.
+  const ParameterSpace space({positive_axis("youngs_modulus")});
+  ReconstructionOptions o;
+  o.starts = 400;
+  o.bounds["youngs_modulus"] = {2000, 1e6};
+  double lo = 1e300, hi = 0;
+  int below = 0;
+  const double margin = std::pow(500.0, 0.02);
+  for (const Vec& x : sample_starts(space, vec({5000}), o)) {
+    lo = std::min(lo, x[0]), hi = std::max(hi, x[0]);
+    below += x[0] < std::sqrt(2000 * margin * 50000);
+  }
+  EXPECT_GE(lo, 2000 * margin * (1 - 1e-12));
+  EXPECT_LE(hi, 50000 * (1 + 1e-12));
+  EXPECT_LT(lo, 2000 * margin * 1.1);
+  EXPECT_GT(hi, 50000 / 1.1);
+  EXPECT_NEAR(below, 200, 40);  // half below the geometric mean
+  o.bounds["youngs_modulus"] = {1e6, 1e8};
+  for (const Vec& x : sample_starts(space, vec({5000}), o)) {
+    EXPECT_GE(x[0], 1e6 * std::pow(100.0, 0.02) * (1 - 1e-12));
+    EXPECT_LE(x[0], 1e8 / std::pow(100.0, 0.02) * (1 + 1e-12));
+  }
+}
+
 TEST(ReconstructionFailures, BadOptionsAreInputErrors) {
   const Problem& problem = sphere_problem();
   ReconstructionOptions o;
@@ -1270,7 +1392,16 @@ TEST(ReconstructionFailures, BadOptionsAreInputErrors) {
   expect_input_error([&] { reconstruct(problem, o); }, {"'youngs'", "youngs_modulus"});
   o.fit = {"youngs_modulus"};
   o.optimizer = "newton";
-  expect_input_error([&] { reconstruct(problem, o); }, {"'newton'", "rprop", "lbfgs"});
+  expect_input_error([&] { reconstruct(problem, o); }, {"'newton'", "rprop", "lbfgs", "lm"});
+  expect_input_error([] { check_optimizer_name("LM"); }, {"'LM'", "lm"});
+  EXPECT_NO_THROW(check_optimizer_name("lm"));
+  o.optimizer = "lm";
+  o.finite_differences = true;
+  expect_input_error([&] { reconstruct(problem, o); }, {"--gradient fd", "lm"});
+  o.finite_differences = false;
+  o.bounds["youngs_modulus"] = {1e5, 1e3};
+  expect_input_error([&] { reconstruct(problem, o); }, {"bounds of youngs_modulus", "leave no value"});
+  o.bounds.clear();
   o.optimizer = "rprop";
   o.initial_values = {vec({-5.0})};
   expect_input_error([&] { reconstruct(problem, o); }, {"youngs_modulus", "positive"});

@@ -18,12 +18,12 @@ class StoppingRules {
   void accepted(double cost, double gradient_norm) {
     ++iterations_;
     if (!std::isfinite(cost)) {
-      reason_ = "non-finite cost";
+      reason_ = "failed: non-finite cost";
       return;
     }
-    if (gradient_norm <= o_.gradient_tolerance) reason_ = "gradient below tolerance";
+    if (gradient_norm <= o_.gradient_tolerance) reason_ = "converged: gradient";
     if (has_last_ && std::abs(cost - last_) <= o_.relative_tolerance * std::abs(cost)) {
-      if (++stalled_ >= 3) reason_ = "cost change below tolerance";
+      if (++stalled_ >= 3) reason_ = "converged: relative cost change < tol";
     } else {
       stalled_ = 0;
     }
@@ -106,7 +106,7 @@ class BarzilaiBorwein : public RuledOptimizer {
       step = rules_.iterations() % 2 == 0 ? s.dot(s) / sy : sy / y.dot(y);
       step = std::abs(step);
       if (!std::isfinite(step) || step == 0) {
-        rules_.stop("Barzilai-Borwein step undefined (no change in the gradient)");
+        rules_.stop("failed: Barzilai-Borwein step undefined (no change in the gradient)");
         return;
       }
       // Never move more than the first step's length times 10 in one go.
@@ -146,7 +146,7 @@ class Lbfgs : public RuledOptimizer {
       return;
     }
     if (++trials_ > 20) {
-      rules_.stop("line search failed");
+      rules_.stop("failed: line search");
       return;
     }
     // Armijo failed: shrink; curvature failed with a descent slope: grow.
@@ -165,7 +165,7 @@ class Lbfgs : public RuledOptimizer {
     g_ = g;
     if (rules_.done()) return;
     if (g.norm() <= o_.gradient_tolerance) {
-      rules_.stop("gradient below tolerance");
+      rules_.stop("converged: gradient");
       return;
     }
     // Two-loop recursion.

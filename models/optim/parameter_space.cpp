@@ -36,6 +36,33 @@ ParameterAxis default_axis(const std::string& name, double nominal) {
   return a;
 }
 
+ParameterAxis with_bounds(const ParameterAxis& axis, double lower, double upper) {
+  if (std::isnan(lower) || std::isnan(upper))
+    throw InputError(fmt::format("bounds of {}: [{:g}, {:g}] must be numbers", axis.name, lower, upper));
+  if (!std::isfinite(upper)) return axis;
+  ParameterAxis a = axis;
+  switch (axis.kind) {
+    case ParameterAxis::Kind::Positive:
+      a.logarithmic = lower > 0;
+      lower = std::max(lower, 0.0);
+      break;
+    case ParameterAxis::Kind::Bounded:
+      lower = std::max(lower, axis.lower), upper = std::min(upper, axis.upper);
+      break;
+    case ParameterAxis::Kind::Free:
+      if (!std::isfinite(lower)) return axis;
+      break;
+  }
+  if (!(lower < upper))
+    throw InputError(fmt::format("bounds of {}: [{:g}, {:g}] leave no value{}", axis.name, lower, upper,
+                                 axis.kind == ParameterAxis::Kind::Bounded
+                                     ? fmt::format(" within its range [{:g}, {:g}]", axis.lower, axis.upper)
+                                     : ""));
+  a.kind = ParameterAxis::Kind::Bounded;
+  a.lower = lower, a.upper = upper;
+  return a;
+}
+
 Eigen::VectorXd ParameterSpace::to_internal(const Eigen::VectorXd& x) const {
   Eigen::VectorXd z(size());
   for (int i = 0; i < size(); ++i) {
@@ -48,7 +75,8 @@ Eigen::VectorXd ParameterSpace::to_internal(const Eigen::VectorXd& x) const {
       case ParameterAxis::Kind::Bounded: {
         if (!(x[i] > a.lower && x[i] < a.upper))
           throw InputError(fmt::format("{} must be strictly between {} and {}, found {}", a.name, a.lower, a.upper, x[i]));
-        const double t = (x[i] - a.lower) / (a.upper - a.lower);
+        const double t = a.logarithmic ? std::log(x[i] / a.lower) / std::log(a.upper / a.lower)
+                                       : (x[i] - a.lower) / (a.upper - a.lower);
         z[i] = std::log(t / (1 - t));
         break;
       }
@@ -66,7 +94,10 @@ Eigen::VectorXd ParameterSpace::to_physical(const Eigen::VectorXd& z) const {
     const ParameterAxis& a = axes_[i];
     switch (a.kind) {
       case ParameterAxis::Kind::Positive: x[i] = std::exp(std::clamp(z[i], -kMaxLog, kMaxLog)); break;
-      case ParameterAxis::Kind::Bounded: x[i] = a.lower + (a.upper - a.lower) / (1 + std::exp(-z[i])); break;
+      case ParameterAxis::Kind::Bounded:
+        x[i] = a.logarithmic ? std::clamp(a.lower * std::exp(std::log(a.upper / a.lower) / (1 + std::exp(-z[i]))), a.lower, a.upper)
+                             : a.lower + (a.upper - a.lower) / (1 + std::exp(-z[i]));
+        break;
       case ParameterAxis::Kind::Free: x[i] = a.scale * z[i]; break;
     }
   }
@@ -81,7 +112,9 @@ Eigen::VectorXd ParameterSpace::gradient_to_internal(const Eigen::VectorXd& z, c
       case ParameterAxis::Kind::Positive: out[i] = std::abs(z[i]) > kMaxLog ? 0.0 : g[i] * std::exp(z[i]); break;
       case ParameterAxis::Kind::Bounded: {
         const double s = 1 / (1 + std::exp(-z[i]));
-        out[i] = g[i] * (a.upper - a.lower) * s * (1 - s);
+        const double span = a.logarithmic ? std::log(a.upper / a.lower) * a.lower * std::exp(std::log(a.upper / a.lower) * s)
+                                          : a.upper - a.lower;
+        out[i] = g[i] * span * s * (1 - s);
         break;
       }
       case ParameterAxis::Kind::Free: out[i] = g[i] * a.scale; break;

@@ -3,6 +3,9 @@
 //   positive (E, density, damping):  x = exp(z)                     (relative steps)
 //   bounded (Poisson ratio, angles): x = lo + (hi - lo) sigmoid(z)  (never leaves [lo, hi])
 //   free (gravity, velocities, heights): x = s z, s = a typical magnitude
+// Explicit bounds [lo, hi] given for a parameter (a plausible range) make its axis bounded; a
+// positive parameter's with lo > 0 then runs the sigmoid over log x, so that its steps stay
+// relative: x = exp(log lo + (log hi - log lo) sigmoid(z)).
 // Gradients are carried over exactly: dJ/dz = dJ/dx dx/dz.
 #pragma once
 #include <Eigen/Core>
@@ -15,11 +18,18 @@ struct ParameterAxis {
   std::string name;
   enum class Kind { Positive, Bounded, Free } kind = Kind::Free;
   double lower = 0, upper = 0;  // Bounded
+  bool logarithmic = false;     // Bounded: the sigmoid runs over log x (lower > 0)
   double scale = 1;             // Free
 };
 
 // The default axis of a named parameter (see models/sim/parameters.h for names).
 ParameterAxis default_axis(const std::string& name, double nominal);
+
+// `axis` limited to [lower, upper] (explicit bounds, a plausible range): bounded, within a
+// bounded axis's own range; a positive axis logarithmic if lower > 0, else linear on [0, upper].
+// An infinite upper end (or an infinite lower end of a free axis) leaves the axis as it is.
+// InputError (naming the parameter) for a NaN or for bounds that leave no value.
+ParameterAxis with_bounds(const ParameterAxis& axis, double lower, double upper);
 
 class ParameterSpace {
  public:

@@ -5,12 +5,13 @@
 
 #include <chrono>
 #include <cmath>
-#include <limits>
 #include <memory>
 #include <numeric>
 #include <random>
 
 #include "runtime/errors.h"
+#include "models/optim/levenberg_marquardt.h"
+#include "models/optim/surface_residuals.h"
 #include "models/sim/parameters.h"
 
 namespace ssc {
@@ -85,18 +86,37 @@ class StartSpace {
 // Evaluates the starts at `points` as one batch. A simulation failure that names its batch
 // items (SimulationError::items) drops those starts and runs the others again as one batch;
 // one that does not, one start at a time, so that only the failing starts are dropped.
-// Returns false for a failed start.
+// Returns false for a failed start. With `residuals`, also each point's residual vector
+// (forward simulations only: `gradient` is then ignored).
 std::vector<bool> evaluate_batch(BatchSimulations& sims, const Problem& problem, const SurfaceConstraintCost& cost,
                                  const PhysicalParameters& base,
                                  const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& points,
                                  std::vector<CostGradient>* results, std::vector<std::string>* failures,
-                                 bool gradient = true) {
+                                 bool gradient = true, const SurfaceResiduals* residuals = nullptr,
+                                 std::vector<ResidualVector>* residual_values = nullptr) {
   GradientOptions options;
-  options.gradient = gradient;
+  options.gradient = gradient && !residuals;
   const int n = int(points.size());
   std::vector<bool> ok(n, true);
   results->assign(n, CostGradient{});
   failures->assign(n, "");
+  if (residuals) residual_values->assign(n, ResidualVector{});
+  // One result per batch item; item i is points[pending[i]] (the first beyond `pending`).
+  auto run = [&](Simulation& sim, const std::vector<int>& pending) {
+    if (!residuals) return evaluate_cost_gradient(sim, cost, problem.frames, options);
+    std::vector<ResidualVector> r(size_t(sim.batch()));
+    for (ResidualVector& v : r) v.r.resize(residuals->size()), v.matched.resize(size_t(residuals->size()));
+    std::vector<int> steps;
+    for (const ObservedFrame& f : problem.frames) steps.push_back(f.step);
+    const std::vector<CostGradient> c = evaluate_trajectory_gradient(
+        sim, steps,
+        [&](size_t f, int item, const double* u, const double* band, double*, double*) {
+          return residuals->frame(f, u, band, &r[size_t(item)]);
+        },
+        options);
+    for (size_t i = 0; i < pending.size(); ++i) (*residual_values)[size_t(pending[i])] = std::move(r[i]);
+    return c;
+  };
   std::vector<int> pending(n);
   std::iota(pending.begin(), pending.end(), 0);
   while (!pending.empty()) {
@@ -107,7 +127,7 @@ std::vector<bool> evaluate_batch(BatchSimulations& sims, const Problem& problem,
       // Places beyond m (a larger batch kept on the GPU) run copies of the first start.
       for (int i = 0; i < sim.batch(); ++i)
         sim.set_parameters(i, with_values(base, names, points[size_t(pending[size_t(i < m ? i : 0)])]));
-      const std::vector<CostGradient> r = evaluate_cost_gradient(sim, cost, problem.frames, options);
+      const std::vector<CostGradient> r = run(sim, pending);
       for (int i = 0; i < m; ++i) (*results)[size_t(pending[size_t(i)])] = r[size_t(i)];
       return ok;
     } catch (const SimulationError& e) {
@@ -129,7 +149,7 @@ std::vector<bool> evaluate_batch(BatchSimulations& sims, const Problem& problem,
     try {
       const std::unique_ptr<Simulation> sim = sims.make(1);
       sim->set_parameters(0, with_values(base, names, points[size_t(s)]));
-      (*results)[size_t(s)] = evaluate_cost_gradient(*sim, cost, problem.frames, options)[0];
+      (*results)[size_t(s)] = run(*sim, {s})[0];
     } catch (const SimulationError& e) {
       ok[size_t(s)] = false;
       (*failures)[size_t(s)] = e.what();
@@ -148,48 +168,167 @@ std::map<std::string, std::pair<double, double>> scene_start_ranges(const Scene&
   return ranges;
 }
 
+namespace {
+
+// Whether explicit bounds changed the axis (with_bounds leaves it as it is for an open end).
+bool narrowed(const ParameterAxis& before, const ParameterAxis& after) {
+  return after.kind != before.kind || after.lower != before.lower || after.upper != before.upper;
+}
+
+// A bounded axis's range less 2 % at each end (of the log range for a logarithmic axis).
+std::pair<double, double> inner_range(const ParameterAxis& a) {
+  if (!a.logarithmic) {
+    const double margin = 0.02 * (a.upper - a.lower);
+    return {a.lower + margin, a.upper - margin};
+  }
+  const double margin = std::pow(a.upper / a.lower, 0.02);
+  return {a.lower * margin, a.upper / margin};
+}
+
+}  // namespace
+
 std::vector<Eigen::VectorXd> sample_starts(const ParameterSpace& space, const Eigen::VectorXd& nominal,
                                            const ReconstructionOptions& o) {
   if (!o.initial_values.empty()) return o.initial_values;
   std::mt19937_64 rng(o.seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
+  auto draw = [&](const ParameterAxis& a, int i, double u) {
+    if (const auto r = o.start_ranges.find(a.name); r != o.start_ranges.end())
+      return r->second.first + u * (r->second.second - r->second.first);
+    switch (a.kind) {
+      case ParameterAxis::Kind::Positive:
+        return nominal[i] * std::exp(std::log(o.low) + u * (std::log(o.high) - std::log(o.low)));
+      case ParameterAxis::Kind::Bounded: {
+        const double margin = 0.02 * (a.upper - a.lower);
+        return a.lower + margin + u * (a.upper - a.lower - 2 * margin);
+      }
+      case ParameterAxis::Kind::Free:
+        break;
+    }
+    return nominal[i] + (2 * u - 1) * o.spread * std::max(std::abs(nominal[i]), 1.0);
+  };
   std::vector<Eigen::VectorXd> starts;
   for (int s = 0; s < o.starts; ++s) {
     Eigen::VectorXd x(space.size());
     for (int i = 0; i < space.size(); ++i) {
       const ParameterAxis& a = space.axes()[i];
       const double u = unit(rng);
-      if (const auto r = o.start_ranges.find(a.name); r != o.start_ranges.end()) {
-        x[i] = r->second.first + u * (r->second.second - r->second.first);
+      const auto b = o.bounds.find(a.name);
+      if (b == o.bounds.end()) {
+        x[i] = draw(a, i, u);
         continue;
       }
-      switch (a.kind) {
-        case ParameterAxis::Kind::Positive:
-          x[i] = nominal[i] * std::exp(std::log(o.low) + u * (std::log(o.high) - std::log(o.low)));
-          break;
-        case ParameterAxis::Kind::Bounded: {
-          const double margin = 0.02 * (a.upper - a.lower);
-          x[i] = a.lower + margin + u * (a.upper - a.lower - 2 * margin);
-          break;
-        }
-        case ParameterAxis::Kind::Free:
-          x[i] = nominal[i] + (2 * u - 1) * o.spread * std::max(std::abs(nominal[i]), 1.0);
-          break;
+      // Within the bounds: the part of the usual range that lies inside them, else all of them.
+      const ParameterAxis bounded = with_bounds(a, b->second.first, b->second.second);
+      const auto [inner_lo, inner_hi] = inner_range(bounded);
+      double lo = std::min(draw(a, i, 0), draw(a, i, 1)), hi = std::max(draw(a, i, 0), draw(a, i, 1));
+      if (!narrowed(a, bounded) || (lo >= inner_lo && hi <= inner_hi)) {
+        x[i] = draw(a, i, u);
+        continue;
       }
+      lo = std::max(lo, inner_lo), hi = std::min(hi, inner_hi);
+      if (!(lo < hi)) lo = inner_lo, hi = inner_hi;
+      x[i] = bounded.logarithmic ? std::exp(std::log(lo) + u * (std::log(hi) - std::log(lo))) : lo + u * (hi - lo);
     }
     starts.push_back(x);
   }
   return starts;
 }
 
+void check_optimizer_name(const std::string& name) {
+  if (name == "lm") return;
+  for (const std::string& n : optimizer_names())
+    if (n == name) return;
+  throw InputError(fmt::format("unknown optimizer '{}'; choose one of rprop, rprop-paper, gd, lbfgs, lm", name));
+}
+
+namespace {
+
+// The start's record once its optimiser has stopped.
+void finish_start(StartRecord& rec, const StartSpace& space, int iterations, const std::string& reason,
+                  const Eigen::VectorXd& best_point, double best_cost) {
+  rec.iterations = iterations;
+  rec.stop_reason = reason;
+  rec.converged = rec.stop_reason.rfind("converged", 0) == 0;
+  if (rec.failed || best_point.size() == 0) return;
+  rec.final = space.to_physical(best_point);
+  rec.final_cost = best_cost;
+}
+
+// Levenberg-Marquardt starts (levenberg_marquardt.h): each round, every running start's trial
+// point and its probes, n + 1 points per start, as one batch of forward simulations whose
+// residual vectors are taken at the observed frames.
+void fit_least_squares(const Problem& problem, const ReconstructionOptions& o, const PhysicalParameters& base,
+                       const SurfaceConstraintCost& cost, BatchSimulations& sims, const std::vector<StartSpace>& spaces,
+                       ReconstructionResult& result, const ReconstructionProgress& progress) {
+  const SurfaceResiduals residuals(cost, problem.frames);
+  const int S = int(spaces.size());
+  std::vector<LevenbergMarquardt> lm;
+  for (int s = 0; s < S; ++s)
+    lm.emplace_back(spaces[s].to_internal(result.starts[s].initial), o.optimizer_options, o.fd_step);
+  for (int round = 0;; ++round) {
+    std::vector<int> active;
+    for (int s = 0; s < S; ++s)
+      if (!lm[s].done()) active.push_back(s);
+    if (active.empty()) break;
+    std::vector<Eigen::VectorXd> points;
+    std::vector<size_t> first;
+    for (int s : active) {
+      first.push_back(points.size());
+      for (const Eigen::VectorXd& z : lm[s].ask()) points.push_back(spaces[s].to_physical(z));
+    }
+    std::vector<CostGradient> values;
+    std::vector<std::string> failures;
+    std::vector<ResidualVector> r;
+    const std::vector<bool> ok =
+        evaluate_batch(sims, problem, cost, base, result.names, points, &values, &failures, false, &residuals, &r);
+    result.evaluations += int(points.size());
+    for (size_t k = 0; k < active.size(); ++k) {
+      const int s = active[k];
+      const size_t n = size_t(spaces[s].space().size()) + 1, a = first[k];
+      std::string failure;
+      for (size_t i = a; i < a + n && failure.empty(); ++i)
+        if (!ok[i]) failure = failures[i];
+      lm[s].tell(std::vector<ResidualVector>(r.begin() + long(a), r.begin() + long(a + n)), failure);
+      StartRecord& rec = result.starts[s];
+      if (!lm[s].accepted()) continue;
+      rec.cost_history.push_back(lm[s].best_cost());
+      rec.parameter_history.push_back(points[a]);
+      rec.frames = values[a].frames;
+      rec.matched_points = rec.observed_points = 0;
+      for (const FrameCost& f : rec.frames) rec.matched_points += f.matched, rec.observed_points += f.points;
+      rec.final_gradient_norm = lm[s].gradient_norm();
+      if (rec.initial_gradient_norm < 0) rec.initial_gradient_norm = rec.final_gradient_norm;
+    }
+    if (progress) {
+      int best = -1;
+      for (int s = 0; s < S; ++s)
+        if (!result.starts[s].cost_history.empty() && (best < 0 || lm[s].best_cost() < lm[best].best_cost())) best = s;
+      if (best >= 0) progress(round + 1, int(active.size()), lm[best].best_cost(), spaces[best].to_physical(lm[best].best_point()));
+    }
+  }
+  for (int s = 0; s < S; ++s) {
+    StartRecord& rec = result.starts[s];
+    rec.failed = rec.cost_history.empty();  // its start point could not be evaluated
+    if (rec.failed) rec.failure = lm[s].failure().empty() ? lm[s].stop_reason() : lm[s].failure();
+    finish_start(rec, spaces[s], lm[s].iterations(), lm[s].stop_reason(), lm[s].best_point(), lm[s].best_cost());
+  }
+}
+
+}  // namespace
+
 ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOptions& o,
                                  const ReconstructionProgress& progress) {
   const auto t0 = std::chrono::steady_clock::now();
+  check_optimizer_name(o.optimizer);
+  if (o.optimizer == "lm" && o.finite_differences)
+    throw InputError("--gradient fd: the lm optimizer takes forward differences of the residuals itself; leave --gradient out");
   const PhysicalParameters base = PhysicalParameters::from_scene(problem.scene);
   ReconstructionResult result;
   result.names = expand_parameter_names(o.fit, base);
   if (result.names.empty()) throw InputError("--fit: name at least one parameter to fit");
   std::vector<ParameterAxis> axes;
+  std::vector<bool> bounded(result.names.size(), false);  // by explicit bounds
   result.nominal.resize(int(result.names.size()));
   for (size_t i = 0; i < result.names.size(); ++i) {
     result.nominal[i] = get_parameter(base, result.names[i]);
@@ -197,31 +336,21 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
     if (const auto m = o.typical_magnitudes.find(result.names[i]);
         m != o.typical_magnitudes.end() && axes.back().kind == ParameterAxis::Kind::Free)
       axes.back().scale = std::max(std::abs(result.nominal[i]), m->second);
-    if (const auto b = o.bounds.find(result.names[i]); b != o.bounds.end() && std::isfinite(b->second.second)) {
-      ParameterAxis& a = axes.back();
-      const double lower = std::isfinite(b->second.first) ? b->second.first
-                           : a.kind == ParameterAxis::Kind::Positive ? 0.0
-                                                                     : std::numeric_limits<double>::quiet_NaN();
-      if (std::isfinite(lower)) {
-        if (a.kind == ParameterAxis::Kind::Bounded) a.lower = std::max(a.lower, lower), a.upper = std::min(a.upper, b->second.second);
-        else a.lower = lower, a.upper = b->second.second;
-        a.kind = ParameterAxis::Kind::Bounded;
-        if (!(a.lower < a.upper))
-          throw InputError(fmt::format("{}: the bounds [{:g}, {:g}] leave no value", result.names[i], b->second.first,
-                                       b->second.second));
-      }
-    }
-    if (axes.back().kind == ParameterAxis::Kind::Positive && !(result.nominal[i] > 0))
+    if (const auto b = o.bounds.find(result.names[i]); b != o.bounds.end())
+      bounded[i] = narrowed(axes.back(), with_bounds(axes.back(), b->second.first, b->second.second));
+    if (axes.back().kind == ParameterAxis::Kind::Positive && !bounded[i] && !(result.nominal[i] > 0))
       throw InputError(fmt::format("{}: --fit {}: its value in the scene is {:g}; the starts of a positive parameter are "
                                    "drawn from 0.1 to 10 times it, so give the scene a nominal value above 0 (e.g. "
                                    "--set {}=VALUE)",
                                    problem.scene.file, result.names[i], result.nominal[i], result.names[i]));
     result.units.push_back(parameter_unit(result.names[i]));
   }
-  const ParameterSpace space(axes);
   ReconstructionOptions sampling = o;  // the scene's plane height ranges, unless given
   for (const auto& [name, range] : scene_start_ranges(problem.scene)) sampling.start_ranges.emplace(name, range);
-  const std::vector<Eigen::VectorXd> initial = sample_starts(space, result.nominal, sampling);
+  std::vector<Eigen::VectorXd> initial = sample_starts(ParameterSpace(axes), result.nominal, sampling);
+  for (size_t i = 0; i < axes.size(); ++i)
+    if (bounded[i]) axes[i] = with_bounds(axes[i], o.bounds.at(axes[i].name).first, o.bounds.at(axes[i].name).second);
+  const ParameterSpace space(axes);
   const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
   BatchSimulations sims(problem, o.device);
 
@@ -239,89 +368,102 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
       free = o.start_free[size_t(s)];
     for (int i : free)
       if (i < 0 || i >= space.size()) throw InputError("reconstruct: a start_free index is out of range");
+    for (int i : free)  // a start on or beyond an explicit bound starts 2 % inside it
+      if (const ParameterAxis& a = axes[size_t(i)]; bounded[size_t(i)]) {
+        const auto [lo, hi] = inner_range(a);
+        if (initial[s][i] <= a.lower) initial[s][i] = lo;
+        if (initial[s][i] >= a.upper) initial[s][i] = hi;
+      }
     spaces.emplace_back(space.axes(), initial[s], free);
     result.starts[s].initial = initial[s];
-    opt.push_back(make_optimizer(o.optimizer, spaces[s].to_internal(initial[s]), o.optimizer_options));
+    if (o.optimizer == "lm")
+      spaces.back().to_internal(initial[s]);  // checks the start values
+    else
+      opt.push_back(make_optimizer(o.optimizer, spaces[s].to_internal(initial[s]), o.optimizer_options));
   }
-  for (int round = 0;; ++round) {
-    std::vector<int> active;
-    for (int s = 0; s < S; ++s)
-      if (!opt[s]->done() && !result.starts[s].failed) active.push_back(s);
-    if (active.empty()) break;
-    std::vector<Eigen::VectorXd> points;
-    for (int s : active) points.push_back(spaces[s].to_physical(opt[s]->ask()));
-    std::vector<CostGradient> values;
-    std::vector<std::string> failures;
-    const std::vector<bool> ok =
-        evaluate_batch(sims, problem, cost, base, result.names, points, &values, &failures, !o.finite_differences);
-    result.evaluations += int(active.size());
-    // The comparison the paper makes: central differences in the optimiser's coordinates
-    // instead of the adjoint, all 2 x parameters x starts probes as one batch.
-    std::vector<Eigen::VectorXd> fd_gradient(active.size());
-    std::vector<std::string> fd_failure(active.size());
-    if (o.finite_differences) {
-      std::vector<Eigen::VectorXd> probes;
-      for (int s : active)
-        for (int i = 0; i < spaces[s].space().size(); ++i)
-          for (double sign : {1.0, -1.0}) {
-            Eigen::VectorXd z = opt[s]->ask();
-            z[i] += sign * o.fd_step;
-            probes.push_back(spaces[s].to_physical(z));
+  if (o.optimizer == "lm") {
+    fit_least_squares(problem, o, base, cost, sims, spaces, result, progress);
+  } else {
+    for (int round = 0;; ++round) {
+      std::vector<int> active;
+      for (int s = 0; s < S; ++s)
+        if (!opt[s]->done() && !result.starts[s].failed) active.push_back(s);
+      if (active.empty()) break;
+      std::vector<Eigen::VectorXd> points;
+      for (int s : active) points.push_back(spaces[s].to_physical(opt[s]->ask()));
+      std::vector<CostGradient> values;
+      std::vector<std::string> failures;
+      const std::vector<bool> ok =
+          evaluate_batch(sims, problem, cost, base, result.names, points, &values, &failures, !o.finite_differences);
+      result.evaluations += int(active.size());
+      // The comparison the paper makes: central differences in the optimiser's coordinates
+      // instead of the adjoint, all 2 x parameters x starts probes as one batch.
+      std::vector<Eigen::VectorXd> fd_gradient(active.size());
+      std::vector<std::string> fd_failure(active.size());
+      if (o.finite_differences) {
+        std::vector<Eigen::VectorXd> probes;
+        for (int s : active)
+          for (int i = 0; i < spaces[s].space().size(); ++i)
+            for (double sign : {1.0, -1.0}) {
+              Eigen::VectorXd z = opt[s]->ask();
+              z[i] += sign * o.fd_step;
+              probes.push_back(spaces[s].to_physical(z));
+            }
+        std::vector<CostGradient> probe_values;
+        std::vector<std::string> probe_failures;
+        const std::vector<bool> probe_ok =
+            evaluate_batch(sims, problem, cost, base, result.names, probes, &probe_values, &probe_failures, false);
+        result.evaluations += int(probes.size());
+        size_t a = 0;
+        for (size_t k = 0; k < active.size(); ++k) {
+          const int n = spaces[active[k]].space().size();
+          fd_gradient[k].resize(n);
+          for (int i = 0; i < n; ++i, a += 2) {
+            fd_gradient[k][i] = (probe_values[a].cost - probe_values[a + 1].cost) / (2 * o.fd_step);
+            if (!probe_ok[a] || !probe_ok[a + 1]) fd_failure[k] = "a finite-difference probe failed: " + probe_failures[probe_ok[a] ? a + 1 : a];
           }
-      std::vector<CostGradient> probe_values;
-      std::vector<std::string> probe_failures;
-      const std::vector<bool> probe_ok =
-          evaluate_batch(sims, problem, cost, base, result.names, probes, &probe_values, &probe_failures, false);
-      result.evaluations += int(probes.size());
-      size_t a = 0;
-      for (size_t k = 0; k < active.size(); ++k) {
-        const int n = spaces[active[k]].space().size();
-        fd_gradient[k].resize(n);
-        for (int i = 0; i < n; ++i, a += 2) {
-          fd_gradient[k][i] = (probe_values[a].cost - probe_values[a + 1].cost) / (2 * o.fd_step);
-          if (!probe_ok[a] || !probe_ok[a + 1]) fd_failure[k] = "a finite-difference probe failed: " + probe_failures[probe_ok[a] ? a + 1 : a];
         }
       }
-    }
-    for (size_t k = 0; k < active.size(); ++k) {
-      StartRecord& rec = result.starts[active[k]];
-      if (!ok[k] || !fd_failure[k].empty()) {
-        rec.failed = true;
-        rec.failure = ok[k] ? fd_failure[k] : failures[k];
-        continue;
+      for (size_t k = 0; k < active.size(); ++k) {
+        StartRecord& rec = result.starts[active[k]];
+        if (!ok[k] || !fd_failure[k].empty()) {
+          rec.failed = true;
+          rec.failure = ok[k] ? fd_failure[k] : failures[k];
+          continue;
+        }
+        Eigen::VectorXd g(space.size());
+        for (int i = 0; i < space.size(); ++i) g[i] = parameter_gradient(values[k].gradient, with_values(base, result.names, points[k]), result.names[i]);
+        const int before = opt[active[k]]->iterations();
+        const Eigen::VectorXd internal_gradient =
+            o.finite_differences ? fd_gradient[k] : spaces[active[k]].gradient_to_internal(opt[active[k]]->ask(), g);
+        if (rec.initial_gradient_norm < 0) rec.initial_gradient_norm = internal_gradient.norm();
+        if (values[k].cost < opt[active[k]]->best_cost()) {
+          rec.frames = values[k].frames;
+          rec.matched_points = rec.observed_points = 0;
+          for (const FrameCost& f : rec.frames) rec.matched_points += f.matched, rec.observed_points += f.points;
+          rec.final_gradient_norm = internal_gradient.norm();
+        }
+        opt[active[k]]->tell(values[k].cost, internal_gradient);
+        if (opt[active[k]]->iterations() != before || rec.cost_history.empty()) {
+          rec.cost_history.push_back(values[k].cost);
+          rec.parameter_history.push_back(points[k]);
+        }
       }
-      Eigen::VectorXd g(space.size());
-      for (int i = 0; i < space.size(); ++i) g[i] = parameter_gradient(values[k].gradient, with_values(base, result.names, points[k]), result.names[i]);
-      const int before = opt[active[k]]->iterations();
-      const Eigen::VectorXd internal_gradient =
-          o.finite_differences ? fd_gradient[k] : spaces[active[k]].gradient_to_internal(opt[active[k]]->ask(), g);
-      if (rec.initial_gradient_norm < 0) rec.initial_gradient_norm = internal_gradient.norm();
-      if (values[k].cost < opt[active[k]]->best_cost()) {
-        rec.frames = values[k].frames;
-        rec.matched_points = rec.observed_points = 0;
-        for (const FrameCost& f : rec.frames) rec.matched_points += f.matched, rec.observed_points += f.points;
-        rec.final_gradient_norm = internal_gradient.norm();
-      }
-      opt[active[k]]->tell(values[k].cost, internal_gradient);
-      if (opt[active[k]]->iterations() != before || rec.cost_history.empty()) {
-        rec.cost_history.push_back(values[k].cost);
-        rec.parameter_history.push_back(points[k]);
+      if (progress) {
+        int best = -1;
+        for (int s = 0; s < S; ++s)
+          if (!result.starts[s].failed && (best < 0 || opt[s]->best_cost() < opt[best]->best_cost())) best = s;
+        if (best >= 0) progress(round + 1, int(active.size()), opt[best]->best_cost(), spaces[best].to_physical(opt[best]->best_point()));
       }
     }
-    if (progress) {
-      int best = -1;
-      for (int s = 0; s < S; ++s)
-        if (!result.starts[s].failed && (best < 0 || opt[s]->best_cost() < opt[best]->best_cost())) best = s;
-      if (best >= 0) progress(round + 1, int(active.size()), opt[best]->best_cost(), spaces[best].to_physical(opt[best]->best_point()));
-    }
+    for (int s = 0; s < S; ++s)
+      finish_start(result.starts[s], spaces[s], opt[s]->iterations(),
+                   result.starts[s].failed ? "failed: simulation" : opt[s]->stop_reason(), opt[s]->best_point(),
+                   opt[s]->best_cost());
   }
   for (int s = 0; s < S; ++s) {
-    StartRecord& rec = result.starts[s];
-    rec.iterations = opt[s]->iterations();
-    rec.stop_reason = rec.failed ? "simulation failed" : opt[s]->stop_reason();
-    if (rec.failed || opt[s]->best_point().size() == 0) continue;
-    rec.final = spaces[s].to_physical(opt[s]->best_point());
-    rec.final_cost = opt[s]->best_cost();
+    const StartRecord& rec = result.starts[s];
+    if (rec.final.size() == 0) continue;
     if (result.best < 0 || rec.final_cost < result.starts[result.best].final_cost) result.best = s;
   }
   result.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -6,6 +6,12 @@
 // Starts: positive parameters are drawn log-uniformly in [low, high] x nominal (default
 // [0.1, 10]), bounded ones uniformly in their bounds, free ones uniformly in
 // nominal +- spread x max(|nominal|, 1) (default spread 0.5). Seeded, so a run repeats.
+// Explicit bounds (a plausible range) make a parameter's axis bounded for every optimiser
+// (parameter_space.h); its starts are drawn from the part of the usual range inside them.
+//
+// optimizer "lm" (levenberg_marquardt.h) fits the per-point residuals (surface_residuals.h)
+// instead of the cost and its adjoint gradient: each round a start's trial point and its n
+// forward-difference probes, all starts' in one batch of forward simulations.
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
@@ -23,7 +29,7 @@ namespace ssc {
 struct ReconstructionOptions {
   std::vector<std::string> fit;  // parameter names (vectors expand)
   int starts = 20;
-  std::string optimizer = "rprop";
+  std::string optimizer = "rprop";  // optimizer_names() or "lm"
   OptimizerOptions optimizer_options;
   std::uint64_t seed = 1;
   double low = 0.1, high = 10.0;  // multiplicative range of positive parameters
@@ -35,8 +41,11 @@ struct ReconstructionOptions {
   // magnitude); default 1 in the parameter's unit), by name.
   std::map<std::string, double> typical_magnitudes;
   // Bounds [lower, upper] that fits of these parameters stay strictly within (plausible
-  // ranges, models/sim/extensions.h): their axis becomes the sigmoid onto the bounds, for
-  // every optimiser. An infinite end keeps the parameter's own transform.
+  // ranges, models/sim/extensions.h), by expanded name; names not fitted are ignored. The axis
+  // becomes bounded on them for every optimiser (with_bounds in parameter_space.h; an infinite
+  // upper end keeps the parameter's own transform), the starts are drawn inside them, and a
+  // start on or beyond a bound starts 2 % of the range (of the log range for a positive
+  // parameter) inside it instead.
   std::map<std::string, std::pair<double, double>> bounds;
   std::vector<Eigen::VectorXd> initial_values;  // overrides the sampling when non-empty (one per start)
   // With initial_values: per start, the indices of the parameters it moves; the others keep
@@ -44,8 +53,8 @@ struct ReconstructionOptions {
   // Starts that fit different subsets of one model's parameters so run as one batch (`ssc
   // diagnose`: the base model, its placebos and several extensions at once). Empty: all.
   std::vector<std::vector<int>> start_free;
-  bool finite_differences = false;  // central differences instead of the adjoint (for comparison)
-  double fd_step = 1e-4;            // in the optimiser's internal coordinates (log space: 0.01 %)
+  bool finite_differences = false;  // central differences instead of the adjoint (for comparison; not with lm)
+  double fd_step = 1e-4;            // in the optimiser's internal coordinates (log space: 0.01 %); also lm's
   std::string device = "cpu";       // "cuda": simulations and adjoints on the GPU (Simulation::use_gpu)
 };
 
@@ -55,14 +64,17 @@ struct StartRecord {
   std::vector<double> cost_history;                // per iteration (cost at the point evaluated)
   std::vector<Eigen::VectorXd> parameter_history;  // physical values per iteration
   int iterations = 0;
+  // "converged: ...", "iteration limit" or "failed: ..." (docs/reconstruction.md#stopping);
+  // converged: the reason starts with "converged".
   std::string stop_reason;
+  bool converged = false;
   // At the best point told (the final values): each frame's matched and observed points and
   // their totals, the norm of the gradient in the optimiser's coordinates; and the norm at
   // the start.
   std::vector<FrameCost> frames;
   int matched_points = 0, observed_points = 0;
   double final_gradient_norm = 0, initial_gradient_norm = -1;
-  bool failed = false;
+  bool failed = false;  // no result: its start point's simulation failed (failure says why)
   std::string failure;
 };
 
@@ -72,11 +84,14 @@ struct ReconstructionResult {
   Eigen::VectorXd nominal;
   std::vector<StartRecord> starts;
   int best = -1;  // index into starts, -1 if every start failed
-  int evaluations = 0;
+  int evaluations = 0;  // simulations: forward and adjoint each, forward only for lm
   double wall_seconds = 0;
 };
 
 using ReconstructionProgress = std::function<void(int iteration, int active, double best_cost, const Eigen::VectorXd& best)>;
+
+// InputError unless `name` is one of optimizer_names() or "lm" (listing them).
+void check_optimizer_name(const std::string& name);
 
 ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOptions& options,
                                  const ReconstructionProgress& progress = {});

@@ -106,6 +106,10 @@ void check_fit(const ReconstructionResult& r, const std::string& observations) {
     warn("not_converged", fmt::format("the best start stopped at the iteration limit ({} iterations) with gradient norm "
                                       "{:.3g}: the fit is not converged; raise --iterations",
                                       best.iterations, best.final_gradient_norm));
+  else if (!best.converged)
+    warn("not_converged", fmt::format("the best start stopped with '{}' after {} iterations, gradient norm {:.3g}: the fit "
+                                      "is not converged; try another --optimizer or more --starts",
+                                      best.stop_reason, best.iterations, best.final_gradient_norm));
 }
 
 // How many starts reached the best cost (within 1 %) and how far their parameters spread.
@@ -131,20 +135,20 @@ nlohmann::json convergence_summary(const ReconstructionResult& r) {
     spread[r.names[i]] = {{"min", lo}, {"max", hi}};
   }
   j["spread_of_starts_within_1_percent"] = spread;
-  j["converged"] = r.starts[r.best].stop_reason != "iteration limit";
+  j["converged"] = r.starts[r.best].converged;
   return j;
 }
 
 void print_report(const ReconstructionResult& r, const nlohmann::json& convergence) {
   const StartRecord& best = r.starts[r.best];
-  std::printf("%-6s %-13s %-28s %10s %8s\n", "start", "final cost", "stopped by", "|grad|", "matched");
+  std::printf("%-6s %-13s %-38s %10s %8s\n", "start", "final cost", "stopped by", "|grad|", "matched");
   for (size_t s = 0; s < r.starts.size(); ++s) {
     const StartRecord& rec = r.starts[s];
     if (rec.failed) {
       std::printf("%-6zu failed: %s\n", s, rec.failure.substr(0, 100).c_str());
       continue;
     }
-    std::printf("%-6zu %-13.6g %-28s %10.3g %7.1f%%%s\n", s, rec.final_cost, rec.stop_reason.c_str(), rec.final_gradient_norm,
+    std::printf("%-6zu %-13.6g %-38s %10.3g %7.1f%%%s\n", s, rec.final_cost, rec.stop_reason.c_str(), rec.final_gradient_norm,
                 rec.observed_points ? 100.0 * rec.matched_points / rec.observed_points : 0.0, int(s) == r.best ? "  <- best" : "");
   }
   std::printf("best start %d of %zu: cost %.6g, %d of %d observed points matched; %d start(s) within 1 %% of the best cost\n",
@@ -157,7 +161,8 @@ void print_report(const ReconstructionResult& r, const nlohmann::json& convergen
                 unit.c_str(), r.nominal[i], sp["min"].get<double>(), sp["max"].get<double>());
   }
   if (!convergence["converged"].get<bool>())
-    std::printf("NOT CONVERGED: the best start stopped at the iteration limit; raise --iterations\n");
+    std::printf("NOT CONVERGED: the best start stopped by '%s'%s\n", best.stop_reason.c_str(),
+                best.stop_reason == "iteration limit" ? "; raise --iterations" : "");
 }
 
 }  // namespace
@@ -180,7 +185,7 @@ Command register_reconstruct(CLI::App& app) {
   sub->add_option("--fit", o->fit, "Parameters to fit, comma-separated (e.g. youngs_modulus,stiffness_damping)")->required()->delimiter(',');
   sub->add_option("--starts", o->starts, "Number of perturbed starts")->check(CLI::Range(1, 1000));
   sub->add_option("--iterations", o->iterations, "Iterations per start")->check(CLI::Range(1, 100000));
-  sub->add_option("--optimizer", o->optimizer, "rprop, rprop-paper, gd or lbfgs");
+  sub->add_option("--optimizer", o->optimizer, "rprop, rprop-paper, gd, lbfgs or lm (Levenberg-Marquardt)");
   sub->add_option("--seed", o->seed, "Seed of the start sampling");
   sub->add_option("--gradient", o->gradient, "adjoint (default) or fd: central differences, for comparison")
       ->check(CLI::IsMember({"adjoint", "fd"}));
@@ -201,7 +206,7 @@ Command register_reconstruct(CLI::App& app) {
     ro.seed = o->seed;
     ro.finite_differences = o->gradient == "fd";
     ro.device = device;
-    make_optimizer(ro.optimizer, Eigen::VectorXd::Zero(1), ro.optimizer_options);  // reject unknown names early
+    check_optimizer_name(ro.optimizer);  // reject unknown names early
     const PhysicalParameters nominal = PhysicalParameters::from_scene(problem.scene);
     const std::vector<std::string> names = expand_parameter_names(ro.fit, nominal);
     OutputDir out(o->out, {o->scene, o->observations, problem.scene.object.path});
@@ -249,7 +254,7 @@ Command register_reconstruct(CLI::App& app) {
     j["convergence"] = convergence_summary(r);
     j["goodness_of_fit"] = goodness_json(fit);
     j["optimizer"] = ro.optimizer;
-    j["gradient"] = o->gradient;
+    j["gradient"] = ro.optimizer == "lm" ? "residual forward differences" : o->gradient;
     j["seed"] = ro.seed;
     j["evaluations"] = r.evaluations;
     j["wall_seconds"] = r.wall_seconds;
@@ -266,6 +271,7 @@ Command register_reconstruct(CLI::App& app) {
       e["final_cost"] = rec.failed ? nlohmann::json(nullptr) : nlohmann::json(rec.final_cost);
       e["iterations"] = rec.iterations;
       e["stop_reason"] = rec.stop_reason;
+      e["converged"] = rec.converged;
       if (!rec.failed) {
         e["final_gradient_norm"] = rec.final_gradient_norm;
         e["matched_points"] = rec.matched_points;

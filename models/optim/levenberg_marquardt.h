@@ -1,0 +1,82 @@
+// Levenberg-Marquardt on a residual vector r(z), cost J = 1/2 ||r||^2, with an ask/tell
+// interface like optimizer.h's, so that many starts advance in lockstep with their
+// evaluations run as one batch. Each round a start asks for n + 1 points: the trial point z_t
+// and its forward-difference probes z_t + h e_j (h = fd_step in the internal coordinates).
+// Told their residual vectors, it accepts z_t if the cost fell (the probes then give the
+// Jacobian there, and the next step is ready at once: one batch per iteration) or raises the
+// damping and proposes a shorter step from the same point (the probes are then unused).
+//
+// Step: (J'J + lambda D) dz = -J'r with D the diagonal of J'J, each entry the largest seen so far
+// (Marquardt's scaling kept monotone, as MINPACK does), shortened to |dz_i| <= lm_max_step
+// (internal units: a factor e for a positive parameter), lambda from 1e-3 by Nielsen's rule
+// (rho = actual / predicted decrease; rho > 0: accept, lambda *= max(1/3, 1 - (2 rho - 1)^3),
+// nu = 2; else lambda *= nu, nu *= 2). A point whose `matched` flag differs between the trial
+// and a probe gives that Jacobian entry 0: its residual switched between the robust form and a
+// constant, which has no derivative (surface_residuals.h).
+//
+// Stop reasons (stop_reason(); converged() for the first three):
+//   "converged: gradient"                      ||J'r|| <= gradient_tolerance (also at the start)
+//   "converged: relative cost change < tol"    an accepted step's actual and predicted decrease
+//                                              both <= relative_tolerance x J
+//   "converged: step < tol"                    a proposed step ||dz|| <= step_tolerance (||z|| + step_tolerance)
+//   "iteration limit"                          max_iterations accepted steps
+//   "failed: simulation"                       the start point's evaluation failed (failure())
+//   "failed: non-finite residuals"             at the start point
+//   "failed: non-finite step"                  the damped system had no finite solution
+//   "failed: no decrease after 30 damping increases"
+// A failed trial or probe (a simulation that exploded at a long step) counts as a rejected step.
+#pragma once
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "models/optim/optimizer.h"
+
+namespace ssc {
+
+// One evaluation: the residuals (a fixed layout for every point of one problem) and, per entry,
+// whether it is in its smooth form (a matched point) or a constant (unmatched).
+struct ResidualVector {
+  Eigen::VectorXd r;
+  std::vector<char> matched;
+};
+
+class LevenbergMarquardt {
+ public:
+  LevenbergMarquardt(const Eigen::VectorXd& start, const OptimizerOptions& options, double fd_step);
+  // The points to evaluate next: the trial point, then trial + fd_step e_j, j = 0..n-1.
+  std::vector<Eigen::VectorXd> ask() const;
+  // Their residual vectors, in that order; `failure` non-empty when any of them failed (the
+  // residuals are then not read).
+  void tell(const std::vector<ResidualVector>& values, const std::string& failure = "");
+
+  bool done() const { return !reason_.empty(); }
+  bool converged() const { return reason_.rfind("converged", 0) == 0; }
+  int iterations() const { return iterations_; }
+  const std::string& stop_reason() const { return reason_; }
+  const std::string& failure() const { return failure_; }
+  // The accepted point (the best told: a step is accepted only if it lowers the cost), its cost
+  // and ||J'r|| there; whether the last tell() accepted its trial (the start counts).
+  const Eigen::VectorXd& best_point() const { return z_; }
+  double best_cost() const { return cost_; }
+  double gradient_norm() const { return g_.norm(); }
+  bool accepted() const { return accepted_; }
+  const Eigen::MatrixXd& jacobian() const { return J_; }
+  double damping() const { return lambda_; }
+
+ private:
+  void take(const std::vector<ResidualVector>& values);
+  void propose();
+
+  OptimizerOptions o_;
+  double h_;
+  Eigen::VectorXd z_, trial_, g_, r_, scale_;
+  std::vector<char> matched_;
+  Eigen::MatrixXd J_;
+  double cost_ = 0, predicted_ = 0, lambda_ = 1e-3, nu_ = 2;
+  int iterations_ = 0, rejections_ = 0;
+  bool started_ = false, accepted_ = false;
+  std::string reason_, failure_;
+};
+
+}  // namespace ssc
