@@ -1,10 +1,10 @@
 # The ctest label of every test of ssc_tests, by GoogleTest suite, so that a subset runs alone:
 # `tools/run-tests -L unit` (docs/architecture.md, Tests). Every test has exactly one label:
 #   unit     pure logic, ops and their gradient checks, parsing: well under a second each
-#   physics  simulations checked against closed forms or CalculiX
-#   cli      runs build/bin/ssc (or the catalogue of bad inputs, labelled in CMakeLists.txt)
-#   slow     over ~20 s
-#   gpu      needs a GPU (or NVRTC): skipped, or only its CPU half run, without one
+#   physics  simulations checked against closed forms, CalculiX or the run's audits
+#   cli      runs build/bin/ssc or Chromium (and the catalogue of bad inputs, labelled in CMakeLists.txt)
+#   slow     over ~15 s on an idle core (measured times: docs/architecture.md, Tests)
+#   gpu      needs a GPU: skipped, or only its CPU part run, without one
 # A list holds suites (`Suite`) or single tests (`Suite.Test`); a test's own entry wins over its
 # suite's. A suite in no list gets SSC_DEFAULT_TEST_LABEL, and the test `test_labels`
 # (cmake/check_test_labels.cmake) fails until it is listed.
@@ -21,26 +21,30 @@ set(SSC_TESTS_unit
   OptimBest OptimConvergence OptimFactory OptimRules OptimStopping ParameterSpaceNames ParameterSpaceTransforms
   ReconstructionStarts
   Layering OutputFolder ParameterNames ParameterTable Pcg ReportHtml SceneFiles Units
-  NvrtcCompile.PtxasLogParsing
-  GpuForward.ExplodingGradientFailsCleanlyOnTheCpu GpuForward.ReportsMissingGpuCleanly
-  GpuKernels.GroupsCoverThePlanOnce)
+  NvrtcCache NvrtcCompile
+  GpuForward.ReportsMissingGpuCleanly GpuKernels.GroupsCoverThePlanOnce)
 
 set(SSC_TESTS_physics
   AirDrag CorotationUpdate ExtensionSwitches Friction GradientPipeline HeterogeneousStiffness NeoHookean
   PhysicsBatch PhysicsBounce PhysicsCantilever PhysicsFreeFall PhysicsGrid PhysicsRigidMotion StiffContact
   EnergyAudit MatchCheck RunChecks
   ReconstructionEndToEnd ReconstructionFailures
-  GpuKernels.RandomStateAndEveryAdjointGroupOnTheCpu)
+  GpuForward.ExplodingGradientFailsCleanlyOnTheCpu GpuKernels.RandomStateAndEveryAdjointGroupOnTheCpu)
 
 set(SSC_TESTS_cli
   CliSimulate DiagnoseCli ExtensionFit FrictionFit
   ReportHtml.ChromiumDrawsThePage)
 
-set(SSC_TESTS_slow)
+set(SSC_TESTS_slow
+  DiagnoseCli.NamesFrictionHiddenInDataFromASmallerTimeStep DiagnoseCli.SaysNoneForCleanDataFromASmallerTimeStep
+  ExtensionFit.AirDragFromAFinerSimulation ExtensionFit.MaterialRegionFromASmallerTimeStep
+  ExtensionFit.NeoHookeanYoungsModulusFromASmallerTimeStep ExtensionFit.SecondPlaneFromAFinerSimulation
+  FrictionFit.ReconstructRecoversMuFromAFinerSimulation
+  NeoHookean.LargeDeflectionCantileverAgainstCalculix
+  NvrtcCompile.AllExampleKernelsDoubleAndFloat)
 
 set(SSC_TESTS_gpu
-  GpuAdjoint GpuExtension GpuForward GpuKernels GpuProfile GpuReconstruct
-  NvrtcCache NvrtcCompile)
+  GpuAdjoint GpuExtension GpuForward GpuKernels GpuProfile GpuReconstruct)
 
 # Sets `out` to the label listed for `test` (Suite.Test) or its suite, or to "" if neither is listed.
 function(ssc_test_label test out)
