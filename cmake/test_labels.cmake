@@ -1,6 +1,6 @@
 # The ctest label of every test of ssc_tests, by GoogleTest suite, so that a subset runs alone:
 # `tools/run-tests -L unit` (docs/architecture.md, Tests). Every test has exactly one label:
-#   unit     pure logic, ops and their gradient checks, parsing: well under a second each
+#   unit     pure logic, ops and their gradient checks, parsing: a second at most each
 #   physics  simulations checked against closed forms, CalculiX or the run's audits
 #   cli      runs build/bin/ssc or Chromium (and the catalogue of bad inputs, labelled in CMakeLists.txt)
 #   slow     over ~15 s on an idle core (measured times: docs/architecture.md, Tests)
