@@ -1,0 +1,15 @@
+# Read by ctest after the GoogleTest tests of ssc_tests are defined (TEST_INCLUDE_FILES, appended after
+# gtest_discover_tests in CMakeLists.txt): gives each test its label from cmake/test_labels.cmake.
+include("${CMAKE_CURRENT_LIST_DIR}/test_labels.cmake")
+foreach(ssc_test IN LISTS ssc_tests_TESTS)
+  ssc_test_label("${ssc_test}" ssc_label)
+  if(ssc_label STREQUAL "")
+    set(ssc_label ${SSC_DEFAULT_TEST_LABEL})
+  endif()
+  list(APPEND ssc_labelled_${ssc_label} "${ssc_test}")
+endforeach()
+foreach(ssc_label IN LISTS SSC_TEST_LABELS)
+  if(ssc_labelled_${ssc_label})
+    set_tests_properties(${ssc_labelled_${ssc_label}} PROPERTIES LABELS ${ssc_label})
+  endif()
+endforeach()
