@@ -19,7 +19,8 @@ set(SSC_TESTS_unit
   ImplicitLinearSolve ImplicitPolar ImplicitTrilinear OpAdjointContact OpAdjointElasticity OpAdjointNewmark
   OpAdjointNodal OpAdjointPolar OpAdjointTrilinear OpChecks
   OptimBest OptimConvergence OptimFactory OptimRules OptimStopping ParameterSpaceNames ParameterSpaceTransforms
-  ReconstructionStarts
+  ReconstructionStarts LevenbergMarquardt ParameterBounds
+  ExtensionTable PlausibleRanges RunRecord WriteErrors
   Layering OutputFolder ParameterNames ParameterTable Pcg ReportHtml SceneFiles Units
   NvrtcCache NvrtcCompile
   GpuForward.ReportsMissingGpuCleanly GpuKernels.GroupsCoverThePlanOnce)
@@ -28,15 +29,17 @@ set(SSC_TESTS_physics
   AirDrag CorotationUpdate ExtensionSwitches Friction GradientPipeline HeterogeneousStiffness NeoHookean
   PhysicsBatch PhysicsBounce PhysicsCantilever PhysicsFreeFall PhysicsGrid PhysicsRigidMotion StiffContact
   EnergyAudit MatchCheck RunChecks
-  ReconstructionEndToEnd ReconstructionFailures
+  ReconstructionEndToEnd ReconstructionFailures ReconstructionLeastSquares
+  FrameTimes FrictionSlope GoodnessOfFit RestingStart TablePoints
   GpuForward.ExplodingGradientFailsCleanlyOnTheCpu GpuKernels.RandomStateAndEveryAdjointGroupOnTheCpu)
 
 set(SSC_TESTS_cli
-  CliSimulate DiagnoseCli ExtensionFit FrictionFit
+  CliSimulate DiagnoseCli ExtensionFit FrictionFit GoodnessOfFitCli
   ReportHtml.ChromiumDrawsThePage)
 
 set(SSC_TESTS_slow
   DiagnoseCli.NamesFrictionHiddenInDataFromASmallerTimeStep DiagnoseCli.SaysNoneForCleanDataFromASmallerTimeStep
+  DiagnoseCli.AirDragThatNeedsAnImplausibleDensityIsNotNamed
   ExtensionFit.AirDragFromAFinerSimulation ExtensionFit.MaterialRegionFromASmallerTimeStep
   ExtensionFit.NeoHookeanYoungsModulusFromASmallerTimeStep ExtensionFit.SecondPlaneFromAFinerSimulation
   FrictionFit.ReconstructRecoversMuFromAFinerSimulation
