@@ -9,6 +9,11 @@
 #include "models/sim/parameters.h"
 
 namespace ssc {
+namespace {
+
+constexpr double kParallelPlane = 0.97;  // cos 14 degrees
+
+}  // namespace
 
 std::string plane_parameter(int k, const std::string& key) {
   return k == 0 ? "ground." + key : fmt::format("ground.planes[{}].{}", k, key);
@@ -110,9 +115,15 @@ std::vector<ModelSpec> plane_proposals(const FittedModel& base, int heldin, int 
       if (gap - first_gap[d] > over[d]) over[d] = gap - first_gap[d], observed_at[d] = observed + first_gap[d];
     }
   }
+  // A plane facing as one of the scene's does is that plane's offset, not a second surface.
+  auto new_surface = [&](size_t d) {
+    return std::none_of(p.scene.planes.begin(), p.scene.planes.end(), [&](const PlaneSpec& plane) {
+      return -directions[d].dot(plane.normal.normalized()) > kParallelPlane;
+    });
+  };
   std::vector<size_t> order;
   for (size_t d = 0; d < D; ++d)
-    if (over[d] > 0.5 * p.grid.h) order.push_back(d);
+    if (over[d] > 0.5 * p.grid.h && new_surface(d)) order.push_back(d);
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return over[a] > over[b]; });
   std::vector<size_t> chosen;
   for (size_t d : order)

@@ -28,7 +28,8 @@ ModelSpec placebo_spec(const Scene& scene, const std::vector<std::string>& spare
 // Up to `most` planes the base fit asks for: directions (8 horizontal ones, up and down)
 // along which the fitted body went, in some held-in frame, beyond every observed point by
 // more than half a cell, counted from the same gap in the first observed frame (the part of
-// the body no camera sees), at least 60 degrees apart, furthest first. Each spec adds the
+// the body no camera sees), at least 60 degrees apart, furthest first; none facing within 14
+// degrees of a plane the scene has (that would be the plane's offset, not a second surface). Each spec adds the
 // plane (facing back, where the observed body's extreme was) and fits its height.
 std::vector<ModelSpec> plane_proposals(const FittedModel& base, int heldin, int most);
 

@@ -16,7 +16,7 @@ struct DiagnosisOptions {
   std::vector<std::string> candidates = extension_names();
   int starts = 8, iterations = 30;
   std::uint64_t seed = 1;
-  std::string optimizer = "rprop";
+  std::string optimizer = "lm";  // Levenberg-Marquardt: its fits stop on convergence (docs/diagnosis.md)
   std::string device = "cpu";
   double holdout = 0.3;     // the last fraction of the frames, held out
   double min_gain = 0.2;    // of the base model's held-out cost

@@ -113,6 +113,7 @@ Command register_diagnose(CLI::App& app) {
   sub->add_option("--candidates", o->d.candidates, "Extensions to try, comma-separated (default: " + extension_list() + ")")
       ->delimiter(',');
   sub->add_option("--starts", o->d.starts, "Starts per fit")->check(CLI::Range(1, 1000));
+  sub->add_option("--optimizer", o->d.optimizer, "Optimiser of every fit: lm (default), rprop, rprop-paper, gd, lbfgs");
   sub->add_option("--iterations", o->d.iterations, "Iterations per start")->check(CLI::Range(1, 100000));
   sub->add_option("--holdout", o->d.holdout, "Fraction of the frames held out at the end (default 0.3)");
   sub->add_option("--seed", o->d.seed, "Seed of the starts and the bootstrap");
@@ -136,7 +137,7 @@ Command register_diagnose(CLI::App& app) {
       for (const std::string& w : v.warnings) warn("candidate", v.name + ": " + w);
     nlohmann::json dj = diagnosis_json(d);
     dj["device"] = device;
-    dj["options"] = {{"fit", opt.fit},           {"candidates", opt.candidates}, {"starts", opt.starts},
+    dj["options"] = {{"fit", opt.fit},           {"candidates", opt.candidates}, {"starts", opt.starts}, {"optimizer", opt.optimizer},
                      {"iterations", opt.iterations}, {"holdout", opt.holdout},   {"seed", opt.seed},
                      {"min_gain", opt.min_gain}, {"margin", opt.margin}};
     // Residuals of the base fit, and of the named extension's (else of none).
