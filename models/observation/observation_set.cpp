@@ -546,6 +546,13 @@ ObservationSet read_observations(const std::string& dir) {
   return set;
 }
 
+ObservationSet read_observation_header(const std::string& json_file) {
+  std::error_code ec;
+  if (!fs::is_regular_file(json_file, ec))
+    throw InputError(fmt::format("{}: no such file; give an observation folder's cameras.json ({})", json_file, kDocs));
+  return parse_header(parse_json_file(json_file), json_file);
+}
+
 std::vector<Eigen::Vector3d> observed_points(const ObservationSet& set, int frame) {
   if (frame < 0 || frame >= int(set.frames.size()))
     throw InputError(fmt::format("observed_points: frame {} is outside the observation set (frames 0..{})",

@@ -85,6 +85,9 @@ void write_observation_files(const std::string& folder, const ObservationSet& se
 // the camera's depth range) is an InputError naming the file and the fix.
 ObservationSet read_observations(const std::string& dir);
 
+// cameras.json alone, checked as read_observations checks it; the set has no frames.
+ObservationSet read_observation_header(const std::string& json_file);
+
 // World points of every measured pixel (depth > 0) of every camera of `frame`, in camera
 // order and row-major pixel order within a camera.
 std::vector<Eigen::Vector3d> observed_points(const ObservationSet& set, int frame);

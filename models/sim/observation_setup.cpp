@@ -52,7 +52,12 @@ DepthCamera read_camera(const JsonReader& r, int index) {
 ObservationSpec parse_observation_spec(const Scene& scene) {
   if (!scene.extra.contains("observation"))
     throw InputError(fmt::format("{}: has no 'observation' section (cameras, every, noise); see docs/scene-format.md", scene.file));
-  const JsonReader r(scene.extra.at("observation"), scene.file, "observation");
+  return parse_observation_section(scene.extra.at("observation"), scene.file, "observation");
+}
+
+ObservationSpec parse_observation_section(const nlohmann::json& section, const std::string& file,
+                                          const std::string& key) {
+  const JsonReader r(section, file, key);
   ObservationSpec s;
   s.every = r.integer("every", s.every);
   r.require(s.every >= 1, "every", "must be at least 1");

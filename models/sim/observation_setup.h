@@ -4,6 +4,7 @@
 #pragma once
 #include <cstdint>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,10 @@ struct ObservationSpec {
 
 // Parses scene.extra["observation"]; InputError naming the scene and key.
 ObservationSpec parse_observation_spec(const Scene& scene);
+// The same for an observation section read from anywhere (`key` is its dotted name in
+// `file`, "" for a top-level object), e.g. the cameras file of `ssc render`.
+ObservationSpec parse_observation_section(const nlohmann::json& section, const std::string& file,
+                                          const std::string& key);
 
 // Simulates the scene and renders every camera at every observed step; the set lists the
 // frames' times (frame_times) and the noise (depth_noise).

@@ -10,6 +10,7 @@ using Command = std::function<int()>;
 
 Command register_simulate(CLI::App& app);
 Command register_observe(CLI::App& app);
+Command register_render(CLI::App& app);
 Command register_gradient(CLI::App& app);
 Command register_sweep(CLI::App& app);
 Command register_reconstruct(CLI::App& app);

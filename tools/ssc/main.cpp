@@ -65,6 +65,7 @@ int main(int argc, char** argv) {
   };
   add(ssc::register_simulate);
   add(ssc::register_observe);
+  add(ssc::register_render);
   add(ssc::register_gradient);
   add(ssc::register_sweep);
   add(ssc::register_reconstruct);

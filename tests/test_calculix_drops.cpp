@@ -1,0 +1,70 @@
+// The CalculiX drop data (tests/data/calculix_drops, made by tools/calculix/drops.sh
+// --test-data): a cube dropped onto a 20 degree incline, simulated by ccx 2.20 and rendered
+// with `ssc render`. The data must load as an observation set whose frames fall on the
+// scene's steps and show the body, and a base fit (Young's modulus) must run on it.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <filesystem>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "models/observation/observation_set.h"
+#include "models/sim/observation_setup.h"
+#include "models/sim/scene.h"
+#include "tests/cli_test_folder.h"
+
+namespace ssc {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+const std::string kCase = std::string(SSC_TEST_DATA_DIR) + "/calculix_drops/clean";
+
+TEST(CalculixDrops, DataLoadAndFramesFallOnSteps) {
+  const ObservationSet set = read_observations(kCase + "/obs");
+  const Scene scene = load_scene(kCase + "/scene.json");
+  EXPECT_NEAR(set.dt, 1.0 / 60, 1e-12);
+  EXPECT_EQ(set.first_frame_time, 0.0);
+  EXPECT_EQ(set.cameras.size(), 2u);
+  const std::vector<ObservedFrame> frames = observed_frames(set, scene.time.dt, kCase + "/obs");
+  ASSERT_EQ(int(frames.size()), set.frame_count);
+  EXPECT_EQ(frames.back().step, scene.time.steps);  // the scene runs as long as ccx did
+  for (const ObservedFrame& f : frames) EXPECT_GT(f.points.size(), 500u) << "step " << f.step;
+  // Frame 0 is ccx's undeformed mesh: every observed point lies on the scene's box (the
+  // same cube), within the depth quantisation and the renderer's float32 vertices.
+  const nlohmann::json& object = scene.resolved.at("object");
+  const Eigen::Vector3d centre(object.at("position")[0], object.at("position")[1], object.at("position")[2]);
+  const double angle = object.at("rotation_deg")[2].get<double>() * M_PI / 180;
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  double worst = 0;
+  for (const Eigen::Vector3d& p : frames[0].points) {
+    const Eigen::Vector3d local = R.transpose() * (p - centre);
+    worst = std::max(worst, std::abs(local.cwiseAbs().maxCoeff() - 0.1));
+  }
+  EXPECT_LT(worst, 2e-4) << "observed frame 0 is not the scene's cube";
+}
+
+class CalculixDropsFit : public CliTestFolder {
+ protected:
+  CalculixDropsFit() : CliTestFolder("ssc-calculix-drops-") {}
+};
+
+TEST_F(CalculixDropsFit, BaseFitRuns) {
+  std::string out, err;
+  const std::string fit = (dir_ / "fit").string();
+  ASSERT_EQ(run("reconstruct '" + kCase + "/scene.json' --observations '" + kCase + "/obs' --fit youngs_modulus " +
+                    "--starts 1 --iterations 2 --device cpu --quiet --out '" + fit + "'",
+                &out, &err),
+            0)
+      << out << err;
+  const json result = read_json(fs::path(fit) / "result.json");
+  const double E = result.at("parameters").at("youngs_modulus").get<double>();
+  EXPECT_TRUE(std::isfinite(E) && E > 0) << E;
+  EXPECT_GT(result.at("matched_points").get<double>(), 0.5 * result.at("observed_points").get<double>());
+}
+
+}  // namespace
+}  // namespace ssc

@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# CalculiX drop scenes for ssc (tools/calculix/drops.py): runs ccx on each case, writes the
+# surface PLY frames (60 Hz), the matching ssc scene and renders them with `ssc render`.
+# Needs ccx 2.20 (Debian: apt-get install -y calculix-ccx), python3 and a built ssc.
+# One ccx process per case, single-threaded.
+#
+#   tools/calculix/drops.sh [OUT, default out/calculix_drops] [drops.py options, e.g. --cases clean]
+#   tools/calculix/drops.sh --test-data    # the small set kept in tests/data/calculix_drops
+set -euo pipefail
+
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
+root="$(cd "$here/../.." && pwd)"
+ssc="${SSC:-$root/build/bin/ssc}"
+
+command -v ccx >/dev/null 2>&1 || { echo "drops.sh: ccx not found (Debian/Ubuntu: apt-get install -y calculix-ccx)" >&2; exit 1; }
+command -v python3 >/dev/null 2>&1 || { echo "drops.sh: python3 not found" >&2; exit 1; }
+[ -x "$ssc" ] || { echo "drops.sh: $ssc not found; build it (tools/setup-build) or set SSC=path/to/ssc" >&2; exit 1; }
+
+export OMP_NUM_THREADS=1
+export CCX_NPROC_STIFFNESS=1 CCX_NPROC_EQUATION_SOLVER=1 CCX_NPROC_RESULTS=1
+
+if [ "${1:-}" = "--test-data" ]; then
+    # 12 frames (0.2 s) of the clean case on the coarse mesh; only what the test reads is kept
+    out="$root/tests/data/calculix_drops"
+    tmp="$(mktemp -d)"
+    python3 "$here/drops.py" "$tmp" --cases clean --elements 3 --duration 0.2 --ssc "$ssc"
+    rm -rf "$out/clean"
+    mkdir -p "$out/clean"
+    cp -r "$tmp/clean/obs" "$tmp/clean/scene.json" "$tmp/clean/ccx_run.json" "$tmp/clean/drop_clean.inp" \
+          "$tmp/clean/mesh_clean.inp" "$out/clean/"
+    rm -rf "$tmp"
+    echo "drops.sh: wrote $out/clean"
+    exit 0
+fi
+
+out="${1:-$root/out/calculix_drops}"
+[ $# -gt 0 ] && shift
+python3 "$here/drops.py" "$out" --ssc "$ssc" "$@"
