@@ -30,11 +30,11 @@ set(SSC_TESTS_physics
   PhysicsBatch PhysicsBounce PhysicsCantilever PhysicsFreeFall PhysicsGrid PhysicsRigidMotion StiffContact
   EnergyAudit MatchCheck RunChecks
   ReconstructionEndToEnd ReconstructionFailures ReconstructionLeastSquares
-  FrameTimes FrictionSlope GoodnessOfFit RestingStart TablePoints
+  FrameTimes FrictionSlope GoodnessOfFit RestingStart TablePoints CalculixDrops
   GpuForward.ExplodingGradientFailsCleanlyOnTheCpu GpuKernels.RandomStateAndEveryAdjointGroupOnTheCpu)
 
 set(SSC_TESTS_cli
-  CliSimulate DiagnoseCli ExtensionFit FrictionFit GoodnessOfFitCli
+  CliSimulate DiagnoseCli ExtensionFit FrictionFit GoodnessOfFitCli Render CalculixDropsFit
   ReportHtml.ChromiumDrawsThePage)
 
 set(SSC_TESTS_slow
