@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "models/cost/surface_constraint.h"
+#include "models/optim/surface_residuals.h"
 #include "models/sim/parameters.h"
 #include "runtime/errors.h"
 
@@ -25,28 +26,23 @@ ParameterCorrelation parameter_correlation(const Problem& problem, const Physica
     set_parameter(p, names[size_t(j)], get_parameter(at, names[size_t(j)]) + steps[size_t(j)]);
     sim.set_parameters(j + 1, p);
   }
-  // Each point's residual r, its cost term r^2 / 2 (surface_constraint.h): r = sign(phi) phi_max
-  // sqrt(1 - exp(-phi^2 / phi_max^2)) sqrt(weight / N), phi_max sqrt(weight / N) unmatched.
+  // Each observed point's residual r, its cost term r^2 / 2 (models/optim/surface_residuals.h).
   const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
-  const double phi_max = problem.phi_max;
-  std::vector<std::vector<double>> r(size_t(n + 1));
-  int step = 0;
-  for (const ObservedFrame& frame : problem.frames) {
-    while (step < frame.step) sim.step(), ++step;
-    if (frame.points.empty()) continue;
-    const double scale = std::sqrt(frame.weight / double(frame.points.size()));
-    for (int item = 0; item <= n; ++item)
-      for (const SurfaceConstraintCost::PointResidual& p :
-           cost.point_residuals(frame.points, sim.displacement(item), sim.band_displacement(item)))
-        r[size_t(item)].push_back(
-            scale * (p.matched() ? std::copysign(phi_max * std::sqrt(-std::expm1(-p.phi * p.phi / (phi_max * phi_max))), p.phi)
-                                 : phi_max));
+  const SurfaceResiduals residuals(cost, problem.frames);
+  std::vector<ResidualVector> r(size_t(n + 1));
+  for (ResidualVector& v : r) {
+    v.r.resize(residuals.size());
+    v.matched.resize(size_t(residuals.size()));
   }
-  Eigen::MatrixXd J(Eigen::Index(r[0].size()), n);
-  const Eigen::Map<const Eigen::VectorXd> r0(r[0].data(), Eigen::Index(r[0].size()));
-  for (int j = 0; j < n; ++j)
-    J.col(j) = (Eigen::Map<const Eigen::VectorXd>(r[size_t(j + 1)].data(), Eigen::Index(r[0].size())) - r0) /
-               steps[size_t(j)];
+  int step = 0;
+  for (size_t f = 0; f < problem.frames.size(); ++f) {
+    while (step < problem.frames[f].step) sim.step(), ++step;
+    for (int item = 0; item <= n; ++item)
+      residuals.frame(f, sim.displacement(item), sim.band_displacement(item), &r[size_t(item)]);
+  }
+  const Eigen::VectorXd& r0 = r[0].r;
+  Eigen::MatrixXd J(r0.size(), n);
+  for (int j = 0; j < n; ++j) J.col(j) = (r[size_t(j + 1)].r - r0) / steps[size_t(j)];
   const Eigen::MatrixXd gn = J.transpose() * J;
   std::vector<int> kept;  // the parameters whose step moved the residuals beyond rounding
   for (int i = 0; i < n; ++i)
