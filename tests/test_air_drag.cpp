@@ -84,7 +84,9 @@ TEST(AirDrag, CubeFallingFlatConvergesToItsFaceArea) {
     const double shortfall = 1 - g.discrete_area / area;
     std::printf("  cell %.4f m: A_eff %.6f m^2, %.2f %% below the face area\n", h, g.discrete_area, 100 * shortfall);
     EXPECT_GT(shortfall, 0);
-    if (previous > 0) EXPECT_NEAR(previous / shortfall, 2.0, 0.3) << "first order in the cell size";
+    if (previous > 0) {
+      EXPECT_NEAR(previous / shortfall, 2.0, 0.3) << "first order in the cell size";
+    }
     previous = shortfall;
   }
 }

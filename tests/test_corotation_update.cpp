@@ -61,7 +61,9 @@ TEST(CorotationUpdate, ASpinningBodyStoresOnlyItsCentrifugalStretch) {
                 100 * updated.energy_loss);
     EXPECT_LT(updated.elastic_over_kinetic, 5e-3) << "E " << E;
     EXPECT_LT(updated.energy_rise, 1e-5) << "E " << E;
-    if (E >= 5e6) EXPECT_LT(updated.elastic_over_kinetic, 0.2 * previous_ratio) << "E " << E << ": not falling as 1/E";
+    if (E >= 5e6) {
+      EXPECT_LT(updated.elastic_over_kinetic, 0.2 * previous_ratio) << "E " << E << ": not falling as 1/E";
+    }
     previous_ratio = updated.elastic_over_kinetic;
   }
 }

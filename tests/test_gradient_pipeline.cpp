@@ -435,8 +435,12 @@ TEST(GradientPipeline, FrictionGradientPointsToTheTrueCoefficient) {
     sim.set_parameters(0, p);
     const CostGradient r = evaluate_cost_gradient(sim, *pl->cost, pl->frames, {})[0];
     std::printf("%8.2f %14.6e %14.6e\n", mu, r.cost, r.gradient.input_entry("friction", 0));
-    if (mu <= 0.1) EXPECT_LT(r.gradient.input_entry("friction", 0), 0) << "mu " << mu;
-    if (mu >= 0.22) EXPECT_GT(r.gradient.input_entry("friction", 0), 0) << "mu " << mu;
+    if (mu <= 0.1) {
+      EXPECT_LT(r.gradient.input_entry("friction", 0), 0) << "mu " << mu;
+    }
+    if (mu >= 0.22) {
+      EXPECT_GT(r.gradient.input_entry("friction", 0), 0) << "mu " << mu;
+    }
   }
 }
 
