@@ -14,6 +14,7 @@
 #include "models/sim/body.h"
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
+#include "tests/mean_velocity.h"
 
 namespace ssc {
 namespace {
@@ -52,15 +53,7 @@ Trajectory run(const json& j) {
   Simulation sim(scene, grid);
   Trajectory r;
   const double x0 = sim.center_of_mass(0).x();
-  auto mean_vx = [&] {
-    const double* v = sim.velocity(0);
-    double s = 0, m = 0;
-    for (int i = 0; i < grid.node_count; ++i) {
-      s += grid.node_volume[i] * v[3 * i];
-      m += grid.node_volume[i];
-    }
-    return s / m;
-  };
+  auto mean_vx = [&] { return mean_velocity_x(sim, grid); };
   r.x.push_back(0);
   r.vx.push_back(mean_vx());
   for (int n = 0; n < scene.time.steps; ++n) {

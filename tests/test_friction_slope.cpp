@@ -19,6 +19,7 @@
 #include "models/sim/body.h"
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
+#include "tests/mean_velocity.h"
 
 namespace ssc {
 namespace {
@@ -64,15 +65,7 @@ Motion run(const BlockOnSlope& s) {
   const Eigen::Vector3d c0 = sim.center_of_mass(0);
   const Eigen::Vector3d top = c0 + Eigen::Vector3d(0, 0.9 * s.half_height, 0);
   const Eigen::Vector3d bottom = c0 - Eigen::Vector3d(0, 0.9 * s.half_height, 0);
-  auto mean_vx = [&] {
-    const double* v = sim.velocity(0);
-    double p = 0, mass = 0;
-    for (int i = 0; i < grid.node_count; ++i) {
-      p += grid.node_volume[i] * v[3 * i];
-      mass += grid.node_volume[i];
-    }
-    return p / mass;
-  };
+  auto mean_vx = [&] { return mean_velocity_x(sim, grid); };
   m.x.push_back(0);
   m.vx.push_back(0);
   for (int n = 0; n < scene.time.steps; ++n) {
