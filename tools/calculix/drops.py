@@ -112,18 +112,29 @@ CONTACT_K = 1e8     # N/m^3 (Pa per metre of overclosure), linear pressure-overc
 STICK_SLOPE = 1e6   # N/m^3, tangential stiffness of sticking friction (1e8 made ccx cut back to failure)
 TILT = 20.0         # degrees, polar angle of the incline's normal (azimuth 0: it falls towards +x)
 
+DOWNHILL = (math.cos(math.radians(TILT)), -math.sin(math.radians(TILT)), 0.0)  # the incline's slope line
+SLIDE = tuple(1.2 * x for x in DOWNHILL)  # launched down the incline at 1.2 m/s
+
 CASES = {
-    # name: what, material, planes [(polar, azimuth, height, friction)], start, velocity, duration
+    # name: what, material (E), body half extents, planes [(polar, azimuth, height, friction)],
+    # gap above the first plane, initial velocity and spin (rad/s, about the centre), duration
     "clean": dict(
         what="cube dropped flat onto a frictionless 20 degree incline and sliding down it",
         E=5e4, planes=[(TILT, 0.0, 0.0, None)], gap=0.04, velocity=(0.3, -1.5, 0.0), duration=0.35),
+    "clean_slide": dict(
+        what="cube launched down a frictionless 20 degree incline at 1.2 m/s from 2 mm above it",
+        E=5e4, planes=[(TILT, 0.0, 0.0, None)], gap=0.002, velocity=SLIDE, duration=0.35),
+    "clean_brick": dict(
+        what="a 0.3 x 0.1 x 0.2 m brick thrown spinning onto a flat frictionless floor: it lands on an edge",
+        E=8e4, half=(0.15, 0.05, 0.1), planes=[(0.0, 0.0, 0.0, None)], gap=0.04, velocity=(0.8, -1.5, 0.0),
+        spin=(0.0, 0.0, -3.0), duration=0.35),
     "two_materials": dict(
         what="the clean drop with a body of two halves: E = 50 kPa (x < 0, local) and 400 kPa (x > 0)",
         E=5e4, E_half=4e5, planes=[(TILT, 0.0, 0.0, None)], gap=0.04, velocity=(0.3, -1.5, 0.0),
         duration=0.35),
     "friction": dict(
-        what="the clean drop with Coulomb friction mu = 0.5 on the incline",
-        E=5e4, planes=[(TILT, 0.0, 0.0, 0.5)], gap=0.04, velocity=(0.3, -1.5, 0.0), duration=0.35),
+        what="the clean slide with Coulomb friction mu = 0.5: it slows at g (sin a - mu cos a) = -1.25 m/s^2",
+        E=5e4, planes=[(TILT, 0.0, 0.0, 0.5)], gap=0.002, velocity=SLIDE, duration=0.35),
     "second_plane": dict(
         what="cube thrown down a frictionless 20 degree ramp that ends in a wall (a second plane at x = 0.45 m)",
         E=5e4, planes=[(TILT, 0.0, 0.0, None), (90.0, 180.0, -0.45, None)], gap=0.04,
@@ -135,6 +146,15 @@ CASES = {
 }
 
 
+def half_extents(case):
+    return case.get("half", (HALF,) * 3)
+
+
+def node_velocity(case, centre, x):
+    """The rigid start: v + w x (x - centre)."""
+    return add(case["velocity"], cross(case.get("spin", (0.0, 0.0, 0.0)), add(x, centre, -1.0)))
+
+
 def body_pose(case):
     """Rotation (about z, so that the cube's bottom face lies parallel to the first plane)
     and centre of the cube: gap metres above the first plane, above the world origin."""
@@ -142,7 +162,7 @@ def body_pose(case):
     assert azimuth == 0.0
     R = rot_z(-polar)
     n = normal_from_angles(polar, azimuth)
-    centre = tuple((height + HALF + case["gap"]) * n[i] for i in range(3))
+    centre = tuple((height + half_extents(case)[1] + case["gap"]) * n[i] for i in range(3))
     return R, centre
 
 
@@ -194,14 +214,14 @@ def deck_lines(name, case, mesh, mesh_file, surface_nodes, contact, dt_max):
     for k, (polar, azimuth, height, _) in enumerate(case["planes"]):
         slab, node, elem = slab_lines(k, polar, azimuth, height, node, elem)
         lines += slab
-    # materials
-    if case.get("neo_hookean"):
-        lines += references.neo_hooke("BODY", E, NU, RHO)
-    else:
-        lines += references.elastic("BODY", E, NU, RHO)
+    # materials: ccx's *ELASTIC under NLGEOM is St. Venant-Kirchhoff, which softens in compression
+    # (at 15 % it is about 20 % softer than a corotated or Neo-Hookean body), so the body is
+    # Neo-Hookean unless --material linear asks for the old decks
+    body_material = references.neo_hooke if case["material"] == "neo_hookean" else references.elastic
+    lines += body_material("BODY", E, NU, RHO)
     lines += references.elastic("RIGID", 1e9, 0.3, 1000.0)
     if "E_half" in case:
-        lines += references.elastic("BODY2", case["E_half"], NU, RHO)
+        lines += body_material("BODY2", case["E_half"], NU, RHO)
         lines += ["*SOLID SECTION, ELSET=SOFT, MATERIAL=BODY", "*SOLID SECTION, ELSET=STIFF, MATERIAL=BODY2"]
     else:
         lines += ["*SOLID SECTION, ELSET=EALL, MATERIAL=BODY"]
@@ -222,8 +242,14 @@ def deck_lines(name, case, mesh, mesh_file, surface_nodes, contact, dt_max):
                   "%.6g" % CONTACT_K]
         if mu is not None:
             lines += ["*FRICTION", "%g, %.6g" % (mu, STICK_SLOPE)]
-    v = case["velocity"]  # world coordinates
-    lines += ["*INITIAL CONDITIONS, TYPE=VELOCITY"] + ["NALL, %d, %.10g" % (i + 1, v[i]) for i in range(3)]
+    lines += ["*INITIAL CONDITIONS, TYPE=VELOCITY"]
+    if "spin" in case:
+        for nid in sorted(mesh.coords):
+            v = node_velocity(case, centre, mesh.coords[nid])
+            lines += ["%d, %d, %.10g" % (nid, i + 1, v[i]) for i in range(3)]
+    else:
+        v = case["velocity"]  # world coordinates
+        lines += ["NALL, %d, %.10g" % (i + 1, v[i]) for i in range(3)]
     frames = int(round(case["duration"] * FPS))
     lines += ["*TIME POINTS, NAME=FRAMES"] + ["%.10g" % (f / FPS) for f in range(1, frames + 1)]
     lines += ["*STEP, NLGEOM, INC=1000000",
@@ -239,7 +265,8 @@ def body_mesh(case, elements):
     """The cube as a BoxMesh in its own frame, then placed: coordinates turned and moved
     into the world (the mesh's lattice bookkeeping stays in the local frame)."""
     R, centre = body_pose(case)
-    mesh = references.BoxMesh((-HALF,) * 3, (HALF,) * 3, (elements,) * 3)
+    h = half_extents(case)  # elements per edge: `elements` per 0.2 m
+    mesh = references.BoxMesh(tuple(-x for x in h), h, tuple(max(1, round(elements * x / HALF)) for x in h))
     mesh.coords = {k: add(centre, mat_vec(R, p)) for k, p in mesh.coords.items()}
     return mesh
 
@@ -312,12 +339,13 @@ def scene_json(name, case, cell_size):
     return {
         "name": "calculix_%s" % name,
         "description": "CalculiX drop '%s': %s (tools/calculix/drops.py)" % (name, case["what"]),
-        "object": {"primitive": "box", "half_extents": [HALF] * 3, "position": list(centre),
+        "object": {"primitive": "box", "half_extents": list(half_extents(case)), "position": list(centre),
                    "rotation_deg": [0, 0, -polar]},
         "grid": {"cell_size": cell_size},
         "material": material,
         "gravity": [0, -G, 0],
-        "initial": {"linear_velocity": list(case["velocity"])},
+        "initial": {"linear_velocity": list(case["velocity"]),
+                    "angular_velocity": list(case.get("spin", (0.0, 0.0, 0.0)))},
         "ground": {"planes": planes, "stiffness": CONTACT_K, "softmin_alpha": 5e3},
         "time": {"dt": dt, "steps": steps, "theta": 0.5},
         "solver": {"contact": "implicit"},
@@ -347,6 +375,7 @@ def write_json(path, doc):
 def make_case(name, a):
     """Runs one case into OUT/name: ccx, PLY frames, scene.json, ccx_run.json, and obs/ with --ssc."""
     case = dict(CASES[name])
+    case["material"] = "neo_hookean" if case.get("neo_hookean") else a.material
     if a.duration:
         case["duration"] = a.duration
     out = os.path.join(a.out, name)
@@ -356,7 +385,8 @@ def make_case(name, a):
     write_json(os.path.join(out, "scene.json"), scene)
     info.update({"what": case["what"], "ccx_version": references.ccx_version(), "element": references.ELEMENT,
                  "elements_per_edge": a.elements, "ccx_max_increment_s": a.dt, "contact": a.contact,
-                 "contact_stiffness_N_per_m3": CONTACT_K, "fps": FPS})
+                 "contact_stiffness_N_per_m3": CONTACT_K, "fps": FPS,
+                 "ccx_material": case["material"]})
     write_json(os.path.join(out, "ccx_run.json"), info)
     for f in os.listdir(out):  # keep the deck, the mesh, the .dat and the log
         if f.split(".")[-1] in ("frd", "12d", "cvg", "sta") or f == "spooles.out":
@@ -378,6 +408,9 @@ def main():
     ap.add_argument("--dt", type=float, default=1.0 / 600, help="largest ccx time increment, s")
     ap.add_argument("--cell-size", type=float, default=0.025, help="ssc grid cell size of the scene, m")
     ap.add_argument("--contact", default="NODE TO SURFACE", help="ccx contact type")
+    ap.add_argument("--material", choices=("neo_hookean", "linear"), default="neo_hookean",
+                    help="the body's ccx material: Neo-Hookean (default), or linear elastic, which under NLGEOM "
+                         "is St. Venant-Kirchhoff (the neo_hookean case is always Neo-Hookean)")
     ap.add_argument("--ssc", default=None, help="ssc binary: render the frames into OUT/CASE/obs")
     ap.add_argument("--jobs", type=int, default=os.cpu_count(), help="cases run at once (one ccx each)")
     a = ap.parse_args()

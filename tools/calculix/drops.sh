@@ -26,7 +26,7 @@ if [ "${1:-}" = "--test-data" ]; then
     python3 "$here/drops.py" "$tmp" --cases clean --elements 3 --duration 0.2 --ssc "$ssc"
     rm -rf "$out/clean"
     mkdir -p "$out/clean"
-    cp -r "$tmp/clean/obs" "$tmp/clean/scene.json" "$tmp/clean/ccx_run.json" "$tmp/clean/drop_clean.inp" \
+    cp -r "$tmp/clean/obs" "$tmp/clean/frames" "$tmp/clean/scene.json" "$tmp/clean/ccx_run.json" "$tmp/clean/drop_clean.inp" \
           "$tmp/clean/mesh_clean.inp" "$out/clean/"
     rm -rf "$tmp"
     echo "drops.sh: wrote $out/clean"
