@@ -20,7 +20,7 @@ set(SSC_TESTS_unit
   OpAdjointNodal OpAdjointPolar OpAdjointTrilinear OpChecks
   OptimBest OptimConvergence OptimFactory OptimRules OptimStopping ParameterSpaceNames ParameterSpaceTransforms
   ReconstructionStarts LevenbergMarquardt ParameterBounds
-  ExtensionTable PlausibleRanges RunRecord WriteErrors
+  ExtensionTable PlausibleRanges RunRecord WriteErrors MeasurementCorrection
   Layering OutputFolder ParameterNames ParameterTable Pcg ReportHtml SceneFiles Units
   NvrtcCache NvrtcCompile
   GpuForward.ReportsMissingGpuCleanly GpuKernels.GroupsCoverThePlanOnce)

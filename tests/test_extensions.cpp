@@ -36,8 +36,19 @@ TEST(ExtensionTable, EveryRowIsCompleteAndOwnsItsParameters) {
   for (const ExtensionRow& row : extension_table()) {
     EXPECT_TRUE(names.insert(row.name).second) << row.name << " twice";
     EXPECT_FALSE(row.what.empty()) << row.name;
-    EXPECT_FALSE(row.ops.empty()) << row.name;
+    // A measurement corrects the recording: no op; one parameter with a range around its off value.
+    EXPECT_EQ(row.ops.empty(), row.fit == ExtensionRow::Fit::Measurement) << row.name;
     ASSERT_TRUE(row.parameters && row.owns && row.model_on && row.switch_off) << row.name;
+    if (row.fit == ExtensionRow::Fit::Measurement) {
+      ASSERT_EQ(row.parameters(scene).size(), 1u) << row.name;
+      const std::string name = row.parameters(scene)[0];
+      EXPECT_TRUE(is_measurement_parameter(name)) << name;
+      EXPECT_FALSE(row.unit.empty()) << row.name;
+      ASSERT_TRUE(row.tell) << row.name;
+      const auto [lo, hi] = plausible_range(scene, name, 0.2);
+      EXPECT_LT(lo, row.off_value) << name;
+      EXPECT_GT(hi, row.off_value) << name;
+    }
     if (row.fit == ExtensionRow::Fit::OffValue) {
       ASSERT_TRUE(row.typical && row.start_range) << row.name;
       EXPECT_GT(row.typical(0.2), 0) << row.name;
@@ -64,6 +75,10 @@ TEST(ExtensionTable, EveryRowIsCompleteAndOwnsItsParameters) {
   EXPECT_EQ(owner("ground.planes[1].height"), "second_plane");
   EXPECT_EQ(owner("ground.height"), "ground.height");  // the first plane is the scene's, not an extension
   EXPECT_EQ(owner("material.stiffness_gradient.z"), "heterogeneous_stiffness");
+  EXPECT_EQ(owner("camera.focal_scale"), "focal_length");
+  EXPECT_FALSE(is_measurement_parameter("youngs_modulus"));
+  EXPECT_EQ(find_extension("focal_length")->tell(1 / 1.05), "the cameras' focal lengths (fx, fy in cameras.json) look "
+                                                             "5.0 % too large");
 }
 
 TEST(ExtensionTable, FittingAParameterPutsItsOpInTheModelAndASwitchTakesItOut) {

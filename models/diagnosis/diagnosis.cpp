@@ -10,6 +10,7 @@
 
 #include "models/diagnosis/candidates.h"
 #include "models/diagnosis/held_out.h"
+#include "models/diagnosis/measurement_fit.h"
 #include "models/diagnosis/model_fit.h"
 #include "models/diagnosis/score_test.h"
 #include "models/sim/parameters.h"
@@ -33,7 +34,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 std::string percent(double x) { return fmt::format("{:.0f} %", 100 * x); }
 
 std::string with_unit(const std::string& name, double value) {
-  const std::string unit = parameter_unit(name);
+  const std::string unit = parameter_or_measurement_unit(name);
   return fmt::format("{:.4g}{}", value, unit == "1" ? "" : " " + unit);
 }
 
@@ -101,6 +102,7 @@ std::map<std::string, FittedModel> fit_shared(Diagnosis& d, const DiagnosisConte
 FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const DiagnosisContext& c, const Scene& scene,
                     const std::map<std::string, FittedModel>& shared_fits,
                     std::vector<std::map<std::string, double>>& base_starts, std::string* skipped) {
+  if (row.fit == ExtensionRow::Fit::Measurement) return fit_measurement(row, d.base, c, base_starts);
   std::vector<ModelSpec> specs;
   if (row.fit == ExtensionRow::Fit::ModelSwitch) {
     specs.push_back(candidate_spec(row, scene, c.extent));
@@ -172,7 +174,10 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
     FittedModel& m = d.candidates[i];
     CandidateVerdict& v = d.verdicts[i];
     if (m.failed) continue;
-    const size_t extra = expand_parameter_names(m.extra, PhysicalParameters::from_scene(m.problem.scene)).size();
+    const ExtensionRow* row = find_extension(m.name);
+    const size_t extra = row && row->fit == ExtensionRow::Fit::Measurement
+                             ? m.extra.size()
+                             : expand_parameter_names(m.extra, PhysicalParameters::from_scene(m.problem.scene)).size();
     const Gain g = cost_gain(d.base.frame_costs, m.frame_costs, d.heldin_frames, -1, o.bootstrap, o.seed + i);
     v.gain = g.value, v.gain_low = g.low, v.gain_high = g.high;
     v.placebo_gain = std::max(0.0, placebo_gain(extra));
@@ -243,7 +248,10 @@ void find_undecided(Diagnosis& d, const DiagnosisContext& c) {
 void identifiability_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const DiagnosisContext& c) {
   const Problem& problem = shared ? *shared : m.problem;
   PhysicalParameters at = PhysicalParameters::from_scene(problem.scene);
-  std::vector<std::string> names = m.names;
+  // A measurement's correction is in the problem's frames; its parameter is not the simulation's.
+  std::vector<std::string> names;
+  for (const std::string& n : m.names)
+    if (!is_measurement_parameter(n)) names.push_back(n);
   if (shared)
     for (const ExtensionRow& row : extension_table()) {
       if (row.fit != ExtensionRow::Fit::OffValue) continue;
@@ -253,7 +261,8 @@ void identifiability_at(Diagnosis& d, const FittedModel& m, const Problem* share
           set_parameter(at, n, row.off_value);
         }
     }
-  for (size_t i = 0; i < m.names.size(); ++i) set_parameter(at, m.names[i], m.values[Eigen::Index(i)]);
+  for (size_t i = 0; i < m.names.size(); ++i)
+    if (!is_measurement_parameter(m.names[i])) set_parameter(at, m.names[i], m.values[Eigen::Index(i)]);
   if (std::find(names.begin(), names.end(), "mass_damping") == names.end()) names.push_back("mass_damping");
   std::vector<double> steps;
   for (const std::string& n : names) {
@@ -309,6 +318,14 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
       if (!base_values.count(m.names[i]))
         extras += fmt::format("{}{} = {}", extras.empty() ? "" : ", ", m.names[i], with_unit(m.names[i], m.values[Eigen::Index(i)]));
     if (!extras.empty()) d.lines.push_back("fitted: " + extras);
+    if (const ExtensionRow* row = find_extension(m.name); row && row->fit == ExtensionRow::Fit::Measurement) {
+      std::string corrected;
+      for (size_t i = 0; i < m.names.size(); ++i)
+        if (base_values.count(m.names[i]))
+          corrected += fmt::format("{}{} = {}", corrected.empty() ? "" : ", ", m.names[i],
+                                   with_unit(m.names[i], m.values[Eigen::Index(i)]));
+      d.lines.push_back(fmt::format("{}; with it corrected: {}", row->tell(m.values[m.values.size() - 1]), corrected));
+    }
     if (!m.proposal.empty()) d.lines.push_back("proposed from the data: " + m.proposal);
   }
   for (size_t i = 0; i < d.verdicts.size(); ++i)

@@ -66,7 +66,8 @@ bool stopped_converged(const std::string& stop_reason) {
 
 PhysicalParameters with_values(const Scene& scene, const std::vector<std::string>& names, const Eigen::VectorXd& v) {
   PhysicalParameters p = PhysicalParameters::from_scene(scene);
-  for (size_t i = 0; i < names.size(); ++i) set_parameter(p, names[i], v[Eigen::Index(i)]);
+  for (size_t i = 0; i < names.size(); ++i)
+    if (!is_measurement_parameter(names[i])) set_parameter(p, names[i], v[Eigen::Index(i)]);
   return p;
 }
 

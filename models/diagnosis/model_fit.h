@@ -47,6 +47,8 @@ struct ModelSpec {
 
 // Whether an optimiser's stop reason is a convergence test's (not the iteration limit, not a failure).
 bool stopped_converged(const std::string& stop_reason);
+// The scene's parameters with names set to v; a measurement's parameter is not the
+// simulation's (its correction is in the problem's frames) and is left out.
 PhysicalParameters with_values(const Scene& scene, const std::vector<std::string>& names, const Eigen::VectorXd& v);
 std::map<std::string, double> values_by_name(const FittedModel& m);
 // Every frame's J_SSC term at p.

@@ -129,6 +129,46 @@ std::vector<ExtensionRow> make_table() {
     s.air_drag_key = false;
   };
   rows.push_back(drag);
+
+  // The measurement: cameras.json may be wrong, not the physics.
+  auto measurement = [&](const std::string& name, const std::string& what, const std::string& parameter,
+                         const std::string& unit, double off, std::pair<double, double> range, const std::string& source,
+                         std::function<std::string(double)> tell) {
+    ExtensionRow m;
+    m.name = name;
+    m.what = what;
+    m.fit = ExtensionRow::Fit::Measurement;
+    m.parameters = [parameter](const Scene&) { return std::vector<std::string>{parameter}; };
+    m.off_value = off;
+    m.event = "start";
+    m.owns = [parameter](const std::string& p) { return p == parameter; };
+    m.model_on = [](Scene&) {};
+    m.switch_off = [](Scene&) {};
+    m.unit = unit;
+    m.plausible = range;
+    m.plausible_source = source;
+    m.tell = std::move(tell);
+    rows.push_back(m);
+  };
+  auto percent_off = [](double recorded_over_true, const std::string& what) {
+    const double e = 100 * (recorded_over_true - 1);
+    return fmt::format("{} look {:.1f} % too {}", what, std::abs(e), e > 0 ? "large" : "small");
+  };
+  measurement("focal_length", "the depth cameras' focal lengths (fx, fy in cameras.json) are off by a common factor",
+              "camera.focal_scale", "1", 1, {0.8, 1.25},
+              "calibrated or factory intrinsics are within a few %; 20 % is a calibration for another resolution or lens",
+              [percent_off](double s) { return percent_off(1 / s, "the cameras' focal lengths (fx, fy in cameras.json)"); });
+  measurement("depth_scale", "the recorded depths are off by a common factor (the depth unit, depth_scale in "
+              "cameras.json)", "camera.depth_scale", "1", 1, {0.9, 1.1},
+              "depth sensors' scale errors are about 1 %; 10 % is a wrong depth unit or an uncalibrated sensor",
+              [percent_off](double k) { return percent_off(1 / k, "the recorded depths (depth_scale in cameras.json)"); });
+  measurement("time_offset", "the frames' times are off by a constant (the recording's clock against the "
+              "simulation's start)", "camera.time_offset", "s", 0, {-0.1, 0.1},
+              "a recording's clock and the simulated start agree to within 0.1 s",
+              [](double tau) {
+                return fmt::format("the frames' times (cameras.json) look {:.4g} s {} than the motion they show", std::abs(tau),
+                                   tau > 0 ? "earlier" : "later");
+              });
   return rows;
 }
 
@@ -163,6 +203,16 @@ std::string owner(const std::string& parameter) {
   return parameter;
 }
 
+bool is_measurement_parameter(const std::string& parameter) {
+  const ExtensionRow* row = find_extension(owner(parameter));
+  return row && row->fit == ExtensionRow::Fit::Measurement;
+}
+
+std::string parameter_or_measurement_unit(const std::string& parameter) {
+  if (is_measurement_parameter(parameter)) return find_extension(owner(parameter))->unit;
+  return parameter_row(parameter).unit;
+}
+
 void model_fitted_extensions(Scene& scene, const std::vector<std::string>& fitted) {
   for (const std::string& name : fitted)
     for (const ExtensionRow& row : extension_table())
@@ -183,6 +233,10 @@ std::pair<double, double> plausible_range(const Scene& scene, const std::string&
     say(fmt::format("the scene's plausible.{}", parameter));
     return given->second;
   }
+  if (const ExtensionRow* row = find_extension(owner(parameter)); row && row->fit == ExtensionRow::Fit::Measurement) {
+    say(row->plausible_source);
+    return row->plausible;
+  }
   if (owner(parameter) == "heterogeneous_stiffness") {
     const double g = std::log(kPlausibleStiffnessRatio) / extent;
     say(fmt::format("the modulus changing at most {:g} times across the body's {:.3g} m", kPlausibleStiffnessRatio,
@@ -198,7 +252,7 @@ std::string implausibility(const Scene& scene, const std::string& parameter, dou
   std::string source;
   const auto [lo, hi] = plausible_range(scene, parameter, extent, &source);
   if (value >= lo && value <= hi) return "";
-  const std::string unit = parameter_row(parameter).unit;
+  const std::string unit = parameter_or_measurement_unit(parameter);
   return fmt::format("{} = {:.4g}{} is outside its plausible range [{:g}, {:g}] ({}); no physical object of this kind "
                      "has it. If yours does, widen the range in the scene: \"plausible\": {{\"{}\": [LOWER, UPPER]}}",
                      parameter, value, unit == "1" ? "" : " " + unit, lo, hi, source, parameter);

@@ -30,7 +30,10 @@ struct ExtensionRow {
   //   ProposedPlane  a contact plane proposed from where the base fit leaves the data
   //   ProposedRegion a second material, its interface proposed from the stiffness gradient
   //   ModelSwitch    a change of the model with no parameter of its own
-  enum class Fit { OffValue, ProposedPlane, ProposedRegion, ModelSwitch } fit = Fit::OffValue;
+  //   Measurement    a correction of the recording, not of the physics (a camera's focal
+  //                  length, the depth unit, the frames' clock: models/observation/
+  //                  measurement_correction.h), fitted against the base model's motion
+  enum class Fit { OffValue, ProposedPlane, ProposedRegion, ModelSwitch, Measurement } fit = Fit::OffValue;
   std::vector<std::string> overrides;  // scene overrides that put its ops in the model
   // Its parameters as `--fit` takes them (vectors unexpanded) for a scene.
   std::function<std::vector<std::string>(const Scene&)> parameters;
@@ -48,6 +51,12 @@ struct ExtensionRow {
   std::function<bool(const std::string&)> owns;
   std::function<void(Scene&)> model_on;    // fitting one of its parameters puts it in the model
   std::function<void(Scene&)> switch_off;  // "extensions": {name: false}
+  // Fit::Measurement: its one parameter's unit, plausible range (with what it stands for) and
+  // what a fitted value says of the recording ("the cameras' focal lengths look 5 % too large").
+  std::string unit;
+  std::pair<double, double> plausible{0, 0};
+  std::string plausible_source;
+  std::function<std::string(double)> tell;
 };
 
 const std::vector<ExtensionRow>& extension_table();
@@ -60,6 +69,11 @@ std::string extension_list();
 // The extension a parameter belongs to; the parameter's own name when it belongs to none
 // (youngs_modulus, mass_damping).
 std::string owner(const std::string& parameter);
+
+// The unit of a parameter: its extension row's for a measurement, else the parameter table's.
+std::string parameter_or_measurement_unit(const std::string& parameter);
+// Whether a name is a measurement candidate's parameter ("camera.focal_scale").
+bool is_measurement_parameter(const std::string& parameter);
 
 // Turns on every extension whose parameter is in `fitted` (a fit or sweep of friction puts
 // the friction op in the model), and applies the scene's "extensions" switches.

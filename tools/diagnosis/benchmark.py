@@ -3,7 +3,7 @@
 switched on (two strengths) or none, partly with another discretisation than the fit's; each
 diagnosed by `ssc diagnose` from a scene without the effect. Prints a line per case and writes
 the results as JSON and as the Markdown table of docs/diagnosis.md (--json PATH, PATH.md)."""
-import argparse, copy, json, os, subprocess, sys, time
+import argparse, concurrent.futures, copy, json, os, subprocess, time
 
 # Positions are off the grid planes by a few millimetres: a cube whose faces lie on grid planes
 # is, once it tumbles, rendered by `observe` where the cost does not find it (docs/diagnosis.md).
@@ -42,8 +42,42 @@ def finer_grid(scene):
     s["grid"]["cell_size"] /= 2
     return s
 
-def case(name, effect, strength, data, fit, cross=""):  # cross: how the data's discretisation differs
-    return {"name": name, "effect": effect, "strength": strength, "data": data, "fit": fit, "cross": cross}
+def case(name, effect, strength, data, fit, cross="", edit=None):
+    """cross: how the data's discretisation differs; edit: what is done to the observation
+    folder after `observe` (a wrong measurement, measurement_edit below)."""
+    return {"name": name, "effect": effect, "strength": strength, "data": data, "fit": fit, "cross": cross,
+            "edit": edit}
+
+def measurement_edit(obs, edit):
+    """A measurement gone wrong in the observation folder: ("focal", f) the cameras' fx, fy
+    recorded f times too large; ("depth", k) the depths recorded k times too large (the unit
+    in cameras.json); ("late", n) the frames' times n frame intervals too early (the first
+    frames dropped as a recording that starts late loses them, the others keep their stated
+    times, so the motion they show happened n intervals later)."""
+    kind, amount = edit
+    path = os.path.join(obs, "cameras.json")
+    cams = json.load(open(path))
+    if kind == "focal":
+        for c in cams["cameras"]:
+            c["fx"] *= amount
+            c["fy"] *= amount
+    elif kind == "depth":
+        cams["depth_scale"] *= amount
+    elif kind == "late":
+        shift = amount * cams["dt"]
+        times = cams.get("frame_times") or [cams["first_frame_time"] + f * cams["dt"] for f in range(cams["frame_count"])]
+        keep = [f for f, t in enumerate(times) if t - shift >= -1e-9]
+        for c, cam in enumerate(cams["cameras"]):
+            pattern = cam.get("depth_pattern", "cam%d/depth_%%04d.png" % c)
+            for new, old in enumerate(keep):
+                os.replace(os.path.join(obs, pattern % old), os.path.join(obs, pattern % new))
+            for f in range(len(keep), len(times)):
+                if os.path.exists(os.path.join(obs, pattern % f)):
+                    os.remove(os.path.join(obs, pattern % f))
+        cams["frame_times"] = [times[f] - shift for f in keep]
+        cams["first_frame_time"] = cams["frame_times"][0]
+        cams["frame_count"] = len(keep)
+    json.dump(cams, open(path, "w"), indent=1)
 
 def cases():
     out = []
@@ -94,6 +128,34 @@ def cases():
     out.append(case("clean cube, half dt", "none", "-", finer(fly), fly, "half dt"))
     out.append(case("clean sphere", "none", "-", ball, ball))
     out.append(case("clean sphere, half cells", "none", "-", finer_grid(ball), ball, "half cells"))
+    # the measurement: the physics right, cameras.json wrong (issue 25's amounts)
+    out.append(case("focal length 3 % too large", "focal_length", "-", finer(fly), fly, "half dt", ("focal", 1.03)))
+    out.append(case("depths 2 % too large", "depth_scale", "-", finer(fly), fly, "half dt", ("depth", 1.02)))
+    out.append(case("frames 1.5 intervals late", "time_offset", "-", finer(fly), fly, "half dt", ("late", 1.5)))
+    return out
+
+# The independent set (tools/calculix/drops.sh): the case folder's effect, and how the fit's
+# scene is made from the truth's scene.json that drops.py writes (the effect taken out).
+CALCULIX_EFFECTS = {"clean": "none", "clean_slide": "none", "clean_brick": "none", "friction": "friction",
+                    "two_materials": "two_materials", "second_plane": "second_plane",
+                    "neo_hookean": "nonlinear_material"}
+
+def without_effect(scene):
+    s = copy.deepcopy(scene)
+    s["material"].pop("regions", None)
+    s["material"].pop("model", None)
+    s["ground"]["planes"] = [{k: v for k, v in s["ground"]["planes"][0].items() if k != "friction"}]
+    s.pop("observation", None)
+    return s
+
+def calculix_cases(folder):
+    out = []
+    for name, effect in CALCULIX_EFFECTS.items():
+        scene = os.path.join(folder, name, "scene.json")
+        if os.path.exists(scene):
+            truth = json.load(open(scene))
+            out.append(dict(case("CalculiX " + name, effect, "-", truth, without_effect(truth), "CalculiX"),
+                            frames=os.path.join(folder, name, "frames")))
     return out
 
 def timing_cases():
@@ -112,6 +174,54 @@ def nominal_off(fit):  # the fit's nominal Young's modulus is not the truth
 def run(cmd, **kw):
     return subprocess.run(cmd, capture_output=True, text=True, **kw)
 
+def run_case(c, a):
+    d = os.path.join(a.work, c["name"].replace(" ", "_").replace("/", "_").replace(",", "").replace("%", "pc"))
+    os.makedirs(d, exist_ok=True)
+    data, fit, obs = os.path.join(d, "data.json"), os.path.join(d, "fit.json"), os.path.join(d, "obs")
+    json.dump(c["data"], open(data, "w"), indent=1)
+    json.dump(nominal_off(c["fit"]), open(fit, "w"), indent=1)
+    if "frames" in c:
+        r = run([a.ssc, "render", c["frames"], "--cameras", data, "--fps", "60", "--noise", "0.001", "--seed", "7",
+                 "--out", obs, "--quiet"])
+    else:
+        r = run([a.ssc, "observe", data, "--out", obs, "--device", a.device, "--quiet"])
+    if r.returncode:
+        print(f"{c['name']}: observe failed: {r.stderr.strip()[-300:]}", flush=True)
+        return {"name": c["name"], "effect": c["effect"], "strength": c["strength"], "cause": "observe failed"}
+    if c.get("edit"):
+        measurement_edit(obs, c["edit"])
+    t0 = time.time()
+    r = run([a.ssc, "diagnose", fit, "--observations", obs, "--out", os.path.join(d, "diag"),
+             "--starts", str(a.starts), "--iterations", str(a.iterations), "--device", a.device])
+    wall = time.time() - t0
+    if r.returncode:
+        print(f"{c['name']}: diagnose failed: {r.stderr.strip()[-300:]}", flush=True)
+        return {"name": c["name"], "effect": c["effect"], "strength": c["strength"], "cause": "failed", "seconds": wall}
+    j = json.load(open(os.path.join(d, "diag", "diagnosis.json")))
+    cand = {x["name"]: x for x in j["candidates"]}
+    winner = cand.get(j["cause"], {})
+    models = [j["base"]] + list(cand.values())
+    E_true = c["data"]["material"]["youngs_modulus"]
+    E_final = (winner.get("base_after") or j["base"]["parameters"]).get("youngs_modulus")
+    x = {"name": c["name"], "effect": c["effect"], "strength": c["strength"], "cross": c["cross"],
+         "cause": j["cause"], "gain": winner.get("gain"), "gain_low": winner.get("gain_low"),
+         "gain_high": winner.get("gain_high"), "heldout_before": j["base"]["heldout_cost"],
+         "heldout_after": winner.get("heldout_after"), "confounded": j["confounded"],
+         "placebo_gain": winner.get("placebo_gain"),
+         "gains": {k: v.get("gain") for k, v in cand.items()},
+         "placebo_gains": {k: v.get("placebo_gain") for k, v in cand.items()},
+         "implausible": {k: v.get("implausible") for k, v in cand.items() if v.get("implausible")},
+         "extra": winner.get("extra_parameters", {}),
+         "youngs_true": E_true, "youngs_base": j["base"]["parameters"].get("youngs_modulus"), "youngs_final": E_final,
+         "converged_starts": sum(m.get("convergence", {}).get("converged_starts", 0) for m in models),
+         "starts": sum(m.get("convergence", {}).get("starts", 0) for m in models),
+         "indistinguishable": j.get("identifiability", {}).get("indistinguishable", []),
+         "seconds": wall, "device": a.device}
+    print(f"{c['name']:32s} effect {c['effect']:24s} named {j['cause']:24s} "
+          f"gain {x['gain'] if x['gain'] is not None else float('nan'):.2f} E {E_final:.4g} (true {E_true:.4g}) "
+          f"{wall:6.1f} s", flush=True)
+    return x
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--ssc", required=True)
@@ -122,44 +232,17 @@ def main():
     ap.add_argument("--only", default="", help="comma-separated parts of case names")
     ap.add_argument("--json", default="")
     ap.add_argument("--timing", action="store_true", help="only the 360-step timing case")
+    ap.add_argument("--calculix", default="", help="a tools/calculix/drops.sh output folder: diagnose its cases "
+                    "(rendered here with 1 mm noise) instead of the ssc-made ones")
+    ap.add_argument("--jobs", type=int, default=1, help="diagnoses run at once (one GPU shares them)")
     a = ap.parse_args()
     os.makedirs(a.work, exist_ok=True)
     results = []
-    for c in (timing_cases() if a.timing else cases()):
-        if a.only and not any(part and part in c["name"] for part in a.only.split(",")):
-            continue
-        d = os.path.join(a.work, c["name"].replace(" ", "_").replace("/", "_").replace(",", ""))
-        os.makedirs(d, exist_ok=True)
-        data, fit = os.path.join(d, "data.json"), os.path.join(d, "fit.json")
-        json.dump(c["data"], open(data, "w"), indent=1)
-        json.dump(nominal_off(c["fit"]), open(fit, "w"), indent=1)
-        r = run([a.ssc, "observe", data, "--out", os.path.join(d, "obs"), "--device", a.device, "--quiet"])
-        if r.returncode:
-            print(f"{c['name']}: observe failed: {r.stderr.strip()[-300:]}", flush=True)
-            results.append(dict(c, cause="observe failed", data=None, fit=None)); continue
-        t0 = time.time()
-        r = run([a.ssc, "diagnose", fit, "--observations", os.path.join(d, "obs"), "--out", os.path.join(d, "diag"),
-                 "--starts", str(a.starts), "--iterations", str(a.iterations), "--device", a.device])
-        wall = time.time() - t0
-        if r.returncode:
-            print(f"{c['name']}: diagnose failed: {r.stderr.strip()[-300:]}", flush=True)
-            results.append({"name": c["name"], "effect": c["effect"], "strength": c["strength"], "cause": "failed",
-                            "seconds": wall}); continue
-        j = json.load(open(os.path.join(d, "diag", "diagnosis.json")))
-        cand = {x["name"]: x for x in j["candidates"]}
-        winner = cand.get(j["cause"], {})
-        results.append({"name": c["name"], "effect": c["effect"], "strength": c["strength"], "cross": c["cross"],
-                        "cause": j["cause"], "gain": winner.get("gain"), "gain_low": winner.get("gain_low"),
-                        "gain_high": winner.get("gain_high"), "heldout_before": j["base"]["heldout_cost"],
-                        "heldout_after": winner.get("heldout_after"), "confounded": j["confounded"],
-                        "placebo_gain": winner.get("placebo_gain"),
-                        "gains": {k: v.get("gain") for k, v in cand.items()},
-                        "placebo_gains": {k: v.get("placebo_gain") for k, v in cand.items()},
-                        "indistinguishable": j.get("identifiability", {}).get("indistinguishable", []),
-                        "seconds": wall, "device": a.device})
-        x = results[-1]
-        print(f"{c['name']:32s} effect {c['effect']:24s} named {j['cause']:24s} "
-              f"gain {x['gain'] if x['gain'] is not None else float('nan'):.2f} {wall:6.1f} s", flush=True)
+    todo = timing_cases() if a.timing else calculix_cases(a.calculix) if a.calculix else cases()
+    todo = [c for c in todo if not a.only or any(part and part in c["name"] for part in a.only.split(","))]
+    with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
+        for x in pool.map(lambda c: run_case(c, a), todo):
+            results.append(x)
     if a.json:
         json.dump(results, open(a.json, "w"), indent=1)
         open(a.json + ".md", "w").write(markdown(results))
@@ -167,10 +250,10 @@ def main():
 def markdown(results):
     """The table of docs/diagnosis.md."""
     rows = ["| case | effect | strength | data | named | gain (90 % interval) | its placebo | held-out cost before -> after | "
-            "confounded | time |", "|---|---|---|---|---|---|---|---|---|---|"]
+            "E fitted / true | converged | confounded | time |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         if r.get("cause") in ("failed", "observe failed"):
-            rows.append(f"| {r['name']} | {r['effect']} | {r['strength']} | | **{r['cause']}** | | | | | |"); continue
+            rows.append(f"| {r['name']} | {r['effect']} | {r['strength']} | | **{r['cause']}** | | | | | | | |"); continue
         data = r.get("cross") or "same"
         named = r["cause"] if r["cause"] == r["effect"] else f"**{r['cause']}**"
         if r["cause"] == "none" and r["effect"] != "none":
@@ -180,8 +263,10 @@ def markdown(results):
         placebo = f"{100 * r['placebo_gain']:.0f} %" if r.get("placebo_gain") is not None else "-"
         after = f" -> {r['heldout_after']:.3g}" if r.get("heldout_after") is not None else ""
         conf = "; ".join(f"{x} / {y}" for x, y in r.get("confounded", [])) or "-"
+        E = (f"{r['youngs_final'] / r['youngs_true']:.2f}" if r.get("youngs_final") and r.get("youngs_true") else "-")
+        conv = f"{r['converged_starts']}/{r['starts']}" if r.get("starts") else "-"
         rows.append(f"| {r['name']} | {r['effect']} | {r['strength']} | {data} | {named} | {gain} | {placebo} | "
-                    f"{r['heldout_before']:.3g}{after} | {conf} | {r['seconds']:.1f} s |")
+                    f"{r['heldout_before']:.3g}{after} | {E} | {conv} | {conf} | {r['seconds']:.1f} s |")
     return "\n".join(rows) + "\n"
 
 if __name__ == "__main__":

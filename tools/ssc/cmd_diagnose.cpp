@@ -11,6 +11,7 @@
 
 #include "models/diagnosis/diagnosis.h"
 #include "models/diagnosis/goodness_of_fit.h"
+#include "models/diagnosis/model_fit.h"
 #include "models/diagnosis/report_data.h"
 #include "models/diagnosis/report_html.h"
 #include "models/diagnosis/residuals.h"
@@ -29,11 +30,7 @@
 namespace ssc {
 namespace {
 
-PhysicalParameters fitted_parameters(const FittedModel& m) {
-  PhysicalParameters p = PhysicalParameters::from_scene(m.problem.scene);
-  for (size_t i = 0; i < m.names.size(); ++i) set_parameter(p, m.names[i], m.values[Eigen::Index(i)]);
-  return p;
-}
+PhysicalParameters fitted_parameters(const FittedModel& m) { return with_values(m.problem.scene, m.names, m.values); }
 
 nlohmann::json report_data(const Diagnosis& d, const nlohmann::json& dj, const std::string& scene,
                            const std::string& observations, const std::string& device) {
@@ -45,12 +42,12 @@ nlohmann::json report_data(const Diagnosis& d, const nlohmann::json& dj, const s
   data["candidates"] = dj["candidates"];
   data["confounded"] = dj["confounded"];
   nlohmann::json units = nlohmann::json::object(), base = dj["base"]["parameters"], winner = nlohmann::json::object();
-  for (const auto& [name, value] : base.items()) units[name] = parameter_unit(name);
+  for (const auto& [name, value] : base.items()) units[name] = parameter_or_measurement_unit(name);
   for (const FittedModel& m : d.candidates)
     if (m.name == d.cause)
       for (size_t i = 0; i < m.names.size(); ++i) {
         winner[m.names[i]] = m.values[Eigen::Index(i)];
-        units[m.names[i]] = parameter_unit(m.names[i]);
+        units[m.names[i]] = parameter_or_measurement_unit(m.names[i]);
       }
   data["parameters"] = {{"units", units}, {"base", base}, {"winner", winner}};
   return data;
