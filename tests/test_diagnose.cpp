@@ -155,6 +155,34 @@ TEST_F(DiagnoseCli, SaysNoneForCleanDataFromASmallerTimeStep) {
   EXPECT_EQ(d["cause"], "none");
 }
 
+// The physics right, the measurement wrong: cameras.json's focal lengths 5 % too large (the
+// body looks 5 % smaller). The diagnosis names the camera, fits the factor and, with it
+// corrected, the true Young's modulus.
+TEST_F(DiagnoseCli, NamesTheCameraWhenItsFocalLengthIsOff) {
+  observe(cube_scene(0.01, 0.0, 5e4, true), "obs");
+  const fs::path cameras = dir_ / "obs" / "cameras.json";
+  json c = read_json(cameras);
+  for (json& cam : c["cameras"]) cam["fx"] = cam["fx"].get<double>() * 1.05, cam["fy"] = cam["fy"].get<double>() * 1.05;
+  std::ofstream(cameras) << c.dump(1);
+  std::string out, err;
+  const std::string fit = write("fit.json", cube_scene(0.01, 0.0, 1.25e5, false));
+  ASSERT_EQ(run("diagnose '" + fit + "' --observations '" + (dir_ / "obs").string() + "' --out '" +
+                    (dir_ / "diag").string() + "' --candidates focal_length,air_drag --starts 2 --iterations 12 --device cpu",
+                &out, &err),
+            0)
+      << err;
+  std::printf("%s", out.c_str());
+  const json d = read_json(dir_ / "diag" / "diagnosis.json");
+  EXPECT_EQ(d["cause"], "focal_length");
+  for (const json& m : d["candidates"])
+    if (m["name"] == "focal_length") {
+      EXPECT_NEAR(m["extra_parameters"]["camera.focal_scale"].get<double>(), 1 / 1.05, 0.005);
+      EXPECT_NEAR(m["base_after"]["youngs_modulus"].get<double>(), 5e4, 0.05 * 5e4);
+    }
+  EXPECT_NE(out.find("focal lengths (fx, fy in cameras.json) look 5."), std::string::npos) << out;
+  EXPECT_NE(out.find("% too large; with it corrected: youngs_modulus = "), std::string::npos) << out;
+}
+
 TEST_F(DiagnoseCli, BadInputIsAnInputErrorAndWritesNothing) {
   observe(cube_scene(0.01, 0.0, 5e4, true), "obs");
   const std::string scene = write("scene.json", cube_scene(0.01, 0.0, 5e4, false));

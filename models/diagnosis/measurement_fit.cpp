@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
+#include <limits>
 
 #include "models/cost/surface_constraint.h"
 #include "models/sim/observation_setup.h"
@@ -167,11 +168,27 @@ FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, co
   fm.proposal.clear();
   double value = row.off_value;
   for (int refit = 0;; ++refit) {
-    const MotionTrack track = track_motion(recorded, with_values(recorded.scene, fm.names, fm.values), last_step,
-                                           c.options.device);
-    auto J = [&](double v) { return held_in_cost(recorded, points, parameter, v, track, cost); };
-    const double before = J(value);
-    const double next = search(J, lo, hi), gain = before > 0 ? 1 - J(next) / before : 0;
+    // The motion the frames are laid onto: the current fit's, and at the first round also the
+    // scene's nominal one (a wrong clock or scale can drive the base fit far off, even to a
+    // run the energy audit stops); the better of them.
+    std::vector<PhysicalParameters> motions = {with_values(recorded.scene, fm.names, fm.values)};
+    if (refit == 0) motions.push_back(PhysicalParameters::from_scene(recorded.scene));
+    double before = 0, next = value, best = std::numeric_limits<double>::infinity();
+    std::string failure;
+    for (const PhysicalParameters& motion : motions) {
+      MotionTrack track;
+      try {
+        track = track_motion(recorded, motion, last_step, c.options.device);
+      } catch (const SimulationError& e) {
+        failure = e.what();
+        continue;
+      }
+      auto J = [&](double v) { return held_in_cost(recorded, points, parameter, v, track, cost); };
+      const double x = search(J, lo, hi), cost_x = J(x);
+      if (cost_x < best) best = cost_x, next = x, before = J(value);
+    }
+    if (!std::isfinite(best)) throw SimulationError("no motion to lay the frames onto: " + failure);
+    const double gain = before > 0 ? 1 - best / before : 0;
     const bool moved = std::abs(next - value) > 1e-3 * (hi - lo);
     value = next;
     if (refit == kMostRefits || gain < kRefitGain || (refit > 0 && !moved)) {

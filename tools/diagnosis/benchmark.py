@@ -3,7 +3,7 @@
 switched on (two strengths) or none, partly with another discretisation than the fit's; each
 diagnosed by `ssc diagnose` from a scene without the effect. Prints a line per case and writes
 the results as JSON and as the Markdown table of docs/diagnosis.md (--json PATH, PATH.md)."""
-import argparse, concurrent.futures, copy, json, os, subprocess, time
+import argparse, concurrent.futures, copy, json, os, shutil, subprocess, time
 
 # Positions are off the grid planes by a few millimetres: a cube whose faces lie on grid planes
 # is, once it tumbles, rendered by `observe` where the cost does not find it (docs/diagnosis.md).
@@ -129,9 +129,11 @@ def cases():
     out.append(case("clean sphere", "none", "-", ball, ball))
     out.append(case("clean sphere, half cells", "none", "-", finer_grid(ball), ball, "half cells"))
     # the measurement: the physics right, cameras.json wrong (issue 25's amounts)
-    out.append(case("focal length 3 % too large", "focal_length", "-", finer(fly), fly, "half dt", ("focal", 1.03)))
-    out.append(case("depths 2 % too large", "depth_scale", "-", finer(fly), fly, "half dt", ("depth", 1.02)))
-    out.append(case("frames 1.5 intervals late", "time_offset", "-", finer(fly), fly, "half dt", ("late", 1.5)))
+    # (made with the fit's own discretisation: at half dt the clean cube's base fit is itself 23 %
+    # low, and that model error, not the measurement, is what a fit of these cases would chase)
+    out.append(case("focal length 3 % too large", "focal_length", "-", fly, fly, "", ("focal", 1.03)))
+    out.append(case("depths 2 % too large", "depth_scale", "-", fly, fly, "", ("depth", 1.02)))
+    out.append(case("frames 1.5 intervals late", "time_offset", "-", fly, fly, "", ("late", 1.5)))
     return out
 
 # The independent set (tools/calculix/drops.sh): the case folder's effect, and how the fit's
@@ -180,6 +182,7 @@ def run_case(c, a):
     data, fit, obs = os.path.join(d, "data.json"), os.path.join(d, "fit.json"), os.path.join(d, "obs")
     json.dump(c["data"], open(data, "w"), indent=1)
     json.dump(nominal_off(c["fit"]), open(fit, "w"), indent=1)
+    shutil.rmtree(obs, ignore_errors=True)  # an edited folder is no longer the one ssc wrote
     if "frames" in c:
         r = run([a.ssc, "render", c["frames"], "--cameras", data, "--fps", "60", "--noise", "0.001", "--seed", "7",
                  "--out", obs, "--quiet"])
@@ -220,6 +223,9 @@ def run_case(c, a):
     print(f"{c['name']:32s} effect {c['effect']:24s} named {j['cause']:24s} "
           f"gain {x['gain'] if x['gain'] is not None else float('nan'):.2f} E {E_final:.4g} (true {E_true:.4g}) "
           f"{wall:6.1f} s", flush=True)
+    print("    " + ", ".join(f"{k} {100 * v:.0f}%" for k, v in x["gains"].items() if v is not None) +
+          "; extra " + json.dumps(x["extra"]) + "; converged " + f"{x['converged_starts']}/{x['starts']}", flush=True)
+    json.dump(x, open(os.path.join(d, "result.json"), "w"), indent=1)  # kept if the run is stopped later
     return x
 
 def main():
