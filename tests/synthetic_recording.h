@@ -89,7 +89,8 @@ inline SyntheticRecording make_synthetic_recording(const std::string& folder, co
              {"initial", {{"linear_velocity", {s.velocity.x(), s.velocity.y(), s.velocity.z()}},
                           {"angular_velocity", {s.angular_velocity.x(), s.angular_velocity.y(), s.angular_velocity.z()}}}},
              {"ground", {{"stiffness", 1e6}, {"softmin_alpha", 500}, {"planes", {{{"normal", {0, 1, 0}}, {"height", 0}}}}}},
-             {"time", {{"dt", frame_dt / r.substeps}, {"steps", (s.frames - 1) * r.substeps}, {"theta", 0.6}}}};
+             {"time", {{"dt", frame_dt / r.substeps}, {"steps", (s.frames - 1) * r.substeps}, {"theta", 0.6}}},
+             {"solver", {{"contact", "implicit"}}}};
   r.scene_file = (fs::path(folder) / "truth.json").string();
   std::ofstream(r.scene_file) << r.scene.dump(2);
   const Scene scene = parse_scene(r.scene, r.scene_file);

@@ -37,7 +37,12 @@ PreparedSynthetic prepare_synthetic(const std::string& name, const SyntheticReco
   s.truth = make_synthetic_recording(scratch(name), spec);
   PrepareOptions o;
   o.recording_folder = s.truth.folder;
-  o.recording.fps = spec.fps;
+  if (spec.layout == "tum") {  // TUM has timestamps, but no intrinsics file
+    const DepthCamera& c = s.truth.camera;
+    o.recording.intrinsics = fmt::format("{},{},{},{}", c.fx, c.fy, c.cx, c.cy);
+  } else {
+    o.recording.fps = spec.fps;
+  }
   o.mesh = s.truth.scan;
   o.density = spec.density;
   o.noise = SensorNoise{spec.sensor.sigma0, spec.sensor.per_m2};

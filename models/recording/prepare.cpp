@@ -72,7 +72,7 @@ PreparedRecording prepare_recording(const PrepareOptions& o) {
                                    rec.format == "tum" ? rec.folder + "/depth.txt" : rec.folder);
 
   stage(o, "finding the planes");
-  const std::vector<double> background = far_background(rec.frames);
+  const std::vector<double> background = far_background(rec.frames, o.noise, rec.depth_scale);
   const DepthImage search_image = plane_search_image(rec, background);
   const int stride = std::max(1, int(std::sqrt(double(k.width) * k.height / 40000.0)));
   p.plane_stride = stride;
@@ -97,6 +97,7 @@ PreparedRecording prepare_recording(const PrepareOptions& o) {
   context.background = background;
   const int min_pixels = std::max(20, int(0.0003 * k.width * k.height));
   p.first_classes = classify_pixels(rec.frames.front(), context);
+  p.picture_classes.push_back(p.first_classes);
   const std::vector<DepthComponent> parts = depth_components(rec.frames.front(), p.first_classes, context, min_pixels);
 
   const TriangleMesh mesh = load_mesh(o.mesh);
@@ -196,16 +197,21 @@ PreparedRecording prepare_recording(const PrepareOptions& o) {
   RigidPose last_pose = *p.poses[0];
   int last_frame = 0;
   const double frame_dt = p.timing.frame_dt;
+  const Eigen::Vector3d g_world(0, -p.gravity_magnitude, 0);
   for (int f = 1; f < frames; ++f) {
     const double dt = (p.timing.frame_index[std::size_t(f)] - p.timing.frame_index[std::size_t(last_frame)]) * frame_dt;
-    const Eigen::Vector3d predicted = last_centre + velocity * dt;
+    const Eigen::Vector3d predicted = last_centre + velocity * dt + 0.5 * g_world * dt * dt;
     const std::vector<PixelClass> classes = classify_pixels(rec.frames[std::size_t(f)], context);
+    if (f == (frames - 1) / 2 || f == frames - 1) p.picture_classes.push_back(classes);
     const std::vector<DepthComponent> fparts = depth_components(rec.frames[std::size_t(f)], classes, context, min_pixels);
+    // The part nearest to where the object should be, and every part close to it (ears, a
+    // handle, a side seen past an edge are parts of their own).
+    std::vector<Eigen::Vector3d> centres;
     int best = -1;
     double best_d = 1e300;
     for (size_t i = 0; i < fparts.size(); ++i) {
-      const Eigen::Vector3d c = R * fparts[i].centroid + t;
-      const double d = (c - predicted).norm();
+      centres.push_back(R * fparts[i].centroid + t);
+      const double d = (centres.back() - predicted).norm();
       if (d < best_d && d < scan_extent + 2 * velocity.norm() * dt + 0.05) best_d = d, best = int(i);
     }
     if (best < 0) {
@@ -213,18 +219,30 @@ PreparedRecording prepare_recording(const PrepareOptions& o) {
       p.object_masks[std::size_t(f)].assign(pixel_count, 0);
       continue;
     }
-    p.object_masks[std::size_t(f)] = mask_of(fparts[std::size_t(best)], pixel_count);
-    p.object_pixels[std::size_t(f)] = int(fparts[std::size_t(best)].pixels.size());
+    p.object_masks[std::size_t(f)].assign(pixel_count, 0);
+    for (size_t i = 0; i < fparts.size(); ++i) {
+      const double near = std::min((centres[i] - predicted).norm(), (centres[i] - centres[std::size_t(best)]).norm());
+      if (int(i) != best && near > 0.6 * scan_extent) continue;
+      for (int pixel : fparts[i].pixels) p.object_masks[std::size_t(f)][std::size_t(pixel)] = 1;
+      p.object_pixels[std::size_t(f)] += int(fparts[i].pixels.size());
+    }
     RigidPose start = last_pose;
-    start.translation += velocity * dt;
+    start.translation += predicted - last_centre;
     const std::vector<Eigen::Vector3d> pts =
         object_points_world(rec.frames[std::size_t(f)], k, p.object_masks[std::size_t(f)], p.camera_to_world);
     IcpResult icp = icp_point_to_plane(p.scan, pts, start, 0.2 * scan_extent, huber, 40);
     icp = icp_point_to_plane(p.scan, pts, icp.pose, std::max(0.03 * scan_extent, 5 * huber), huber, 40);
+    if (icp.matched < int(0.8 * pts.size()) || icp.rms > std::max(1.5 * p.icp_rms[0], huber)) {
+      // Lost track (a bounce turns the motion round within a frame): register this frame afresh.
+      CameraView frame_view = view;
+      frame_view.depth = &rec.frames[std::size_t(f)];
+      const RegistrationResult again = register_scan(p.scan, pts, frame_view, huber);
+      if (again.icp.matched > icp.matched || (again.icp.matched == icp.matched && again.icp.rms < icp.rms)) icp = again.icp;
+    }
     p.poses[std::size_t(f)] = icp.pose;
     p.icp_rms[std::size_t(f)] = icp.rms;
     const Eigen::Vector3d centre = icp.pose.apply(p.scan.centroid);
-    velocity = (centre - last_centre) / dt;
+    velocity = (centre - last_centre) / dt + 0.5 * g_world * dt;  // at the end of the interval
     last_centre = centre;
     last_pose = icp.pose;
     last_frame = f;

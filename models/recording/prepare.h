@@ -70,6 +70,7 @@ struct PreparedRecording {
   ScanModel scan;
   double density = 0, mass = 0;
   std::vector<PixelClass> first_classes;        // frame 0's pixel classes (for the picture)
+  std::vector<std::vector<PixelClass>> picture_classes;  // pixel classes of the first, middle and last frame
   std::vector<std::vector<char>> object_masks;  // per frame
   std::vector<int> object_pixels;               // per frame
   std::vector<std::optional<RigidPose>> poses;  // per frame, world

@@ -90,7 +90,9 @@ nlohmann::json prepared_scene(const PreparedRecording& p, const PrepareOptions& 
       {"gravity", vec(Eigen::Vector3d(0, -p.gravity_magnitude, 0))},
       {"initial", {{"linear_velocity", vec(p.velocity.linear)}, {"angular_velocity", vec(p.velocity.angular)}}},
       {"ground", {{"stiffness", o.contact_stiffness}, {"softmin_alpha", o.softmin_alpha}, {"planes", planes}}},
-      {"time", {{"dt", p.timing.frame_dt / substeps}, {"steps", std::max(1, frames_span * substeps)}, {"theta", 0.6}}}};
+      {"time", {{"dt", p.timing.frame_dt / substeps}, {"steps", std::max(1, frames_span * substeps)}, {"theta", 0.6}}},
+      // A stiff surface's contact within the step (docs/scene-format.md, stiff contact).
+      {"solver", {{"contact", "implicit"}}}};
   return scene;
 }
 

@@ -63,17 +63,21 @@ RgbImage planes_picture(const PreparedRecording& p) {
   return img;
 }
 
-RgbImage object_picture(const PreparedRecording& p) {
-  RgbImage img = depth_picture(p.recording.frames.front());
-  for (size_t i = 0; i < p.first_classes.size(); ++i) {
+RgbImage object_picture(const PreparedRecording& p, int frame) {
+  RgbImage img = depth_picture(p.recording.frames[std::size_t(frame)]);
+  const int last = int(p.recording.frames.size()) - 1;
+  const std::size_t which = frame == 0 ? 0 : (frame == last && p.picture_classes.size() > 2 ? 2 : 1);
+  if (which >= p.picture_classes.size()) return img;
+  const std::vector<PixelClass>& classes = p.picture_classes[which];
+  for (size_t i = 0; i < classes.size(); ++i) {
     const int u = int(i) % img.width, v = int(i) / img.width;
     const std::size_t j = i * 3;
     const Colour base = {img.rgb[j], img.rgb[j + 1], img.rgb[j + 2]};
-    if (p.object_masks[0][i]) img.set(u, v, {230, 30, 30});
-    else if (p.first_classes[i] == PixelClass::Plane) img.set(u, v, tint(base, {0, 0, 160}, 0.35));
-    else if (p.first_classes[i] == PixelClass::Static) img.set(u, v, tint(base, {0, 0, 0}, 0.5));
-    else if (p.first_classes[i] == PixelClass::Edge) img.set(u, v, {255, 0, 255});
-    else if (p.first_classes[i] == PixelClass::Candidate) img.set(u, v, tint(base, {255, 200, 0}, 0.6));
+    if (p.object_masks[std::size_t(frame)][i]) img.set(u, v, {230, 30, 30});
+    else if (classes[i] == PixelClass::Plane) img.set(u, v, tint(base, {0, 0, 160}, 0.35));
+    else if (classes[i] == PixelClass::Static) img.set(u, v, tint(base, {0, 0, 0}, 0.5));
+    else if (classes[i] == PixelClass::Edge) img.set(u, v, {255, 0, 255});
+    else if (classes[i] == PixelClass::Candidate) img.set(u, v, tint(base, {255, 200, 0}, 0.6));
   }
   return img;
 }
@@ -103,7 +107,9 @@ std::vector<std::string> write_prepare_pictures(const std::string& folder, const
   const std::vector<std::pair<std::string, RgbImage>> pictures = {
       {"frame0_depth.png", depth_picture(p.recording.frames.front())},
       {"frame0_planes.png", planes_picture(p)},
-      {"frame0_object.png", object_picture(p)},
+      {"frame0_object.png", object_picture(p, 0)},
+      {"middle_object.png", object_picture(p, last / 2)},
+      {"last_object.png", object_picture(p, last)},
       {"pose_first.png", pose_picture(p, 0)},
       {"pose_middle.png", pose_picture(p, last / 2)},
       {"pose_last.png", pose_picture(p, last)}};

@@ -6,21 +6,25 @@
 
 namespace ssc {
 
-std::vector<double> far_background(const std::vector<DepthImage>& frames) {
+std::vector<double> far_background(const std::vector<DepthImage>& frames, const SensorNoise& noise, double depth_scale) {
   if (frames.size() < 3) return {};
   const size_t n = frames.front().depth.size();
-  std::vector<double> far(n, 0.0);
+  std::vector<double> far(n, 0.0), readings;
   for (size_t i = 0; i < n; ++i) {
-    double first = 0, second = 0;
-    int readings = 0;
-    for (const DepthImage& f : frames) {
-      const double z = f.depth[i];
-      if (!(z > 0)) continue;
-      ++readings;
-      if (z > first) second = first, first = z;
-      else if (z > second) second = z;
-    }
-    far[i] = readings >= 3 ? second : 0.0;
+    readings.clear();
+    for (const DepthImage& f : frames)
+      if (f.depth[i] > 0) readings.push_back(f.depth[i]);
+    if (readings.size() < 3) continue;
+    std::sort(readings.begin(), readings.end());
+    // The second largest reading is behind anything that moved past; the static readings are
+    // those within the noise of it, and their median is the background's depth (the largest
+    // readings alone would be biased away from the camera by the noise).
+    const double behind = readings[readings.size() - 2];
+    const double band = 2 * noise_band(noise, behind, depth_scale);
+    const auto first = std::lower_bound(readings.begin(), readings.end(), behind - band);
+    const size_t count = size_t(readings.end() - first);
+    if (count < 2) continue;
+    far[i] = *(first + std::ptrdiff_t(count / 2));
   }
   return far;
 }

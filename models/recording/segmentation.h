@@ -22,10 +22,10 @@ struct SegmentationContext {
   std::vector<double> background;    // per pixel: the recording's far depth, or empty (no static test)
 };
 
-// Per pixel the depth behind anything that moves: the second largest reading over the frames
-// (the largest may be a flying pixel), 0 where fewer than 3 frames read it. Empty for a
-// recording of fewer than 3 frames.
-std::vector<double> far_background(const std::vector<DepthImage>& frames);
+// Per pixel the depth behind anything that moves: the median of the readings within the noise
+// of the second largest one (the largest may be a flying pixel), 0 where fewer than 3 frames
+// read it or fewer than 2 agree. Empty for a recording of fewer than 3 frames.
+std::vector<double> far_background(const std::vector<DepthImage>& frames, const SensorNoise& noise, double depth_scale);
 
 // Pixels with a neighbour (8-neighbourhood) whose depth jumps by more than one surface can.
 std::vector<char> depth_edges(const DepthImage& image, const DepthIntrinsics& k, const SensorNoise& noise,
