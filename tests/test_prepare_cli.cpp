@@ -22,28 +22,36 @@ class PrepareCli : public CliTestFolder {
   }
   std::string prepare_args(const SyntheticRecording& r, const std::string& out) const {
     return "prepare '" + r.folder + "' --mesh '" + r.scan + "' --out '" + (dir_ / out).string() +
-           "' --fps 30 --density 300 --noise 0.001,0.0015 --resolution 14 --quiet";
+           "' --fps 30 --density 300 --noise 0.001,0.0015 --quiet";
   }
 };
 
 TEST_F(PrepareCli, WritesSceneObservationsPicturesAndReconstructTakesThem) {
-  const SyntheticRecording r = recording();
+  SyntheticRecordingSpec spec;
+  spec.frames = 6;
+  spec.resolution = 8;
+  const SyntheticRecording r = recording(spec);
   std::string out, err;
-  ASSERT_EQ(run(prepare_args(r, "prep"), &out, &err), 0) << err;
+  ASSERT_EQ(run(prepare_args(r, "prep") + " --resolution 8", &out, &err), 0) << err;
   EXPECT_NE(out.find("scene.json"), std::string::npos);
   for (const char* f : {"scene.json", "scan.ply", "prepare.json", "ssc.json", "observations/cameras.json",
-                        "observations/cam0/depth_0000.png", "frame0_depth.png", "frame0_planes.png", "frame0_object.png",
-                        "pose_first.png", "pose_middle.png", "pose_last.png"})
+                        "observations/cam0/depth_0005.png", "frame0_depth.png", "frame0_planes.png", "frame0_object.png",
+                        "middle_object.png", "last_object.png", "pose_first.png", "pose_middle.png", "pose_last.png"})
     EXPECT_TRUE(fs::is_regular_file(dir_ / "prep" / f)) << f;
   const nlohmann::json scene = read_json(dir_ / "prep/scene.json");
   EXPECT_EQ(scene["object"]["mesh"], "scan.ply");
   EXPECT_GE(scene["ground"]["planes"].size(), 1u);
   EXPECT_EQ(scene["ground"]["planes"][0]["height"], 0.0);
-  EXPECT_EQ(scene["time"]["steps"], 13 * 7);
+  EXPECT_EQ(scene["time"]["steps"], 5 * 7);
+  EXPECT_EQ(scene["grid"]["resolution"], 8);
   const nlohmann::json cams = read_json(dir_ / "prep/observations/cameras.json");
-  EXPECT_EQ(cams["frame_count"], 14);
-  EXPECT_EQ(cams["frame_times"].size(), 14u);
-  EXPECT_EQ(cams["cameras"][0]["depth_noise"]["per_m2"], 0.0015);
+  EXPECT_EQ(cams["frame_count"], 6);
+  EXPECT_EQ(cams["frame_times"].size(), 6u);
+  const nlohmann::json summary = read_json(dir_ / "prep/prepare.json");
+  EXPECT_EQ(summary["frames"].size(), 6u);
+  EXPECT_EQ(summary["registration"]["hypotheses"], 24);
+  EXPECT_EQ(cams["depth_noise"]["per_m2"], 0.0015);
+  EXPECT_EQ(cams["depth_noise"]["along"], "depth");
   // reconstruct runs on it as it is (one LM iteration: that it runs, not what it finds).
   ASSERT_EQ(run("reconstruct '" + (dir_ / "prep/scene.json").string() + "' --observations '" +
                     (dir_ / "prep/observations").string() + "' --fit youngs_modulus --starts 1 --iterations 1 "
@@ -77,7 +85,7 @@ TEST_F(PrepareCli, PrepareThenReconstructRecoversYoungsModulus) {
   spec.frames = 16;
   const SyntheticRecording r = recording(spec);
   std::string out, err;
-  ASSERT_EQ(run(prepare_args(r, "prep"), &out, &err), 0) << err;
+  ASSERT_EQ(run(prepare_args(r, "prep") + " --resolution 14", &out, &err), 0) << err;
   const std::string fit = " --fit youngs_modulus --starts 3 --iterations 12 --optimizer lm --seed 1 --quiet";
   ASSERT_EQ(run("reconstruct '" + r.scene_file + "' --observations '" + r.clean_observations + "' --out '" +
                     (dir_ / "fit-clean").string() + "'" + fit, &out, &err), 0) << err;
