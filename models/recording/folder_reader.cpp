@@ -24,7 +24,7 @@ DepthRecording read_folder_recording(const std::string& folder, const RecordingO
     r.intrinsics = parse_intrinsics_option(options.intrinsics, &r.intrinsics_source);
   }
   r.depth_scale = depth_scale_option(options, 0.001);
-  r.timestamps = timestamps_from_numbered_files(options, r.files, "plain folder");
+  r.timestamps = timestamps_from_numbered_files(options, r.files, "a folder of depth PNGs");
   select_frames(options, &r.files, &r.timestamps, folder);
   return r;
 }

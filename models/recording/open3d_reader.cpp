@@ -33,7 +33,7 @@ DepthRecording read_open3d_recording(const std::string& folder, const RecordingO
     r.intrinsics_source = file;
   }
   r.depth_scale = depth_scale_option(options, 0.001);
-  r.timestamps = timestamps_from_numbered_files(options, r.files, "Open3D");
+  r.timestamps = timestamps_from_numbered_files(options, r.files, "an Open3D recording");
   select_frames(options, &r.files, &r.timestamps, depth_folder);
   return r;
 }

@@ -151,7 +151,7 @@ void parse_frame_range(const std::string& text, RecordingOptions* o) {
 
 std::vector<double> timestamps_from_fps(const RecordingOptions& o, size_t frames, const std::string& format) {
   if (!o.fps)
-    throw InputError(fmt::format("a {} recording has no timestamps: give the frame rate with --fps (e.g. --fps 30)",
+    throw InputError(fmt::format("{} has no timestamps: give the frame rate with --fps (e.g. --fps 30)",
                                  format));
   if (!(*o.fps > 0) || !std::isfinite(*o.fps))
     throw InputError(fmt::format("--fps {}: must be a positive number of frames per second", *o.fps));

@@ -23,7 +23,9 @@ std::vector<double> far_background(const std::vector<DepthImage>& frames, const 
     const double band = 2 * noise_band(noise, behind, depth_scale);
     const auto first = std::lower_bound(readings.begin(), readings.end(), behind - band);
     const size_t count = size_t(readings.end() - first);
-    if (count < 2) continue;
+    // Background is steady: nearly all readings agree. A moving object that has not cleared the
+    // pixel yet changes its depth from frame to frame, and leaves the pixel without one.
+    if (count < 2 || 4 * count < 3 * readings.size()) continue;
     far[i] = *(first + std::ptrdiff_t(count / 2));
   }
   return far;

@@ -24,7 +24,7 @@ struct SegmentationContext {
 
 // Per pixel the depth behind anything that moves: the median of the readings within the noise
 // of the second largest one (the largest may be a flying pixel), 0 where fewer than 3 frames
-// read it or fewer than 2 agree. Empty for a recording of fewer than 3 frames.
+// read it or fewer than three quarters of its readings (or 2) agree. Empty for a recording of fewer than 3 frames.
 std::vector<double> far_background(const std::vector<DepthImage>& frames, const SensorNoise& noise, double depth_scale);
 
 // Pixels with a neighbour (8-neighbourhood) whose depth jumps by more than one surface can.

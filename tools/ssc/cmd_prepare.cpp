@@ -57,6 +57,7 @@ void copy_file_bytes(const std::string& from, const std::string& to) {
 }
 
 int run_prepare(PrepareCli& c) {
+  if (c.mass && c.density) throw InputError("give --mass or --density, not both (the scan's volume links them)");
   PrepareOptions& o = c.options;
   o.recording_folder = c.recording;
   o.mesh = c.mesh;
