@@ -9,6 +9,7 @@
 
 #include "models/io/run_record.h"
 #include "models/recording/prepare.h"
+#include "runtime/errors.h"
 #include "tests/synthetic_recording.h"
 
 namespace fs = std::filesystem;
@@ -148,6 +149,67 @@ TEST(PrepareSynthetic, TumRecordingWithJitteryTimestamps) {
   check_pose_planes_velocity(s);
   EXPECT_EQ(s.prepared.timing.frame_index.back(), spec.frames - 1);
   EXPECT_NEAR(s.prepared.timing.frame_dt, 1.0 / 30, 0.0005);
+}
+
+}  // namespace
+}  // namespace ssc
+
+namespace ssc {
+namespace {
+
+// A real Kinect frame (tests/data/tum_desk_frame, TUM RGB-D via Open3D's test data): an office
+// desk with objects on it, two chairs, the floor. The scan is a 0.15 m cube for the foam dice
+// on the desk, picked by its pixel. Checks the TUM reader, the planes and the segmentation on
+// real depth: the desk and the floor are level planes about a desk's height apart, the dice is
+// found on the desk and registered resting on it.
+TEST(PrepareRealRecording, TumDeskFrame) {
+  const std::string dir = scratch("tum-desk");
+  const std::string cube = dir + "/dice.obj";
+  {
+    std::ofstream f(cube);
+    for (int i = 0; i < 8; ++i)
+      f << "v " << ((i & 1) ? 0.5 : -0.5) << " " << ((i & 2) ? 0.5 : -0.5) << " " << ((i & 4) ? 0.5 : -0.5) << "\n";
+    f << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+  }
+  PrepareOptions o;
+  o.recording_folder = std::string(SSC_TEST_DATA_DIR) + "/tum_desk_frame";
+  o.recording.intrinsics = "525,525,319.5,239.5";
+  o.mesh = cube;
+  o.scan_scale = 0.15;
+  o.density = 100;
+  o.pick = Eigen::Vector2d(147, 222);
+  clear_warnings();
+  const PreparedRecording p = prepare_recording(o);
+  EXPECT_EQ(p.recording.format, "tum");
+  EXPECT_DOUBLE_EQ(p.recording.depth_scale, 1.0 / 5000);
+  ASSERT_EQ(p.recording.frames.size(), 1u);
+  const PreparedPlane* desk = nullptr;
+  const PreparedPlane* floor = nullptr;
+  for (const PreparedPlane& plane : p.planes) {
+    if (plane.support) desk = &plane;
+    else if (plane.normal.y() > 0.99 && plane.height < -0.3 && !floor) floor = &plane;
+  }
+  ASSERT_NE(desk, nullptr);
+  ASSERT_NE(floor, nullptr) << "no floor found";
+  const double tilt = std::acos(std::min(1.0, std::abs(desk->normal.dot(floor->normal)))) / kDeg;
+  std::printf("desk %.3f m above the floor, %.2f deg from parallel; dice: %d pixels, centre %.3f m above the desk, icp "
+              "rms %.1f mm\n", desk->height - floor->height, tilt, p.object_pixels[0],
+              desk->normal.dot(p.poses[0]->apply(p.scan.centroid)) - desk->height, 1000 * p.icp_rms[0]);
+  EXPECT_NEAR(desk->height - floor->height, 0.72, 0.05) << "an office desk's height";
+  EXPECT_LT(tilt, 3.0);
+  EXPECT_GT(p.object_pixels[0], 1000);
+  EXPECT_LT(p.object_pixels[0], 3000);
+  // The dice rests on the desk: its centre half its size above it (a few mm of Kinect noise and scan size).
+  EXPECT_NEAR(desk->normal.dot(p.poses[0]->apply(p.scan.centroid)) - desk->height, 0.075, 0.015);
+  EXPECT_LT(p.icp_rms[0], 0.012);
+  // Without --pick the desk's other objects of the dice's size are candidates too.
+  o.pick.reset();
+  try {
+    prepare_recording(o);
+    ADD_FAILURE() << "several candidates expected";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("several candidates"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace
