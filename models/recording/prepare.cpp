@@ -63,7 +63,6 @@ double distance_to_inliers(const Eigen::Vector3d& x, const std::vector<int>& pix
 PreparedRecording prepare_recording(const PrepareOptions& o) {
   PreparedRecording p;
   stage(o, "reading the recording");
-  // The folder is the recording's own argument; read_recording takes it from the options' caller.
   p.recording = read_recording(o.recording_folder, o.recording);
   const DepthRecording& rec = p.recording;
   const DepthIntrinsics& k = rec.intrinsics;
