@@ -2,8 +2,9 @@
 // thrown onto a table, simulated by ssc (the truth), in a room with a floor, a back wall and
 // clutter boxes, rendered with ssc's ray caster and a sensor model (axial noise growing with
 // depth squared, holes at grazing incidence, random dropout, flying pixels, millimetre
-// quantisation), and written in Open3D's or TUM's layout. Beside it: the truth (the scene, the
-// camera, the planes) and the clean ssc-format observations of the object alone.
+// quantisation), and written in Open3D's or TUM's layout. The object is the scan moved by the
+// simulated displacement field. Beside it: the truth (the scene, the camera, the planes) and the
+// clean ssc-format observations of the object alone.
 #pragma once
 #include <Eigen/Geometry>
 #include <fmt/format.h>
@@ -20,7 +21,6 @@
 #include "models/observation/room_meshes.h"
 #include "models/observation/sensor_model.h"
 #include "models/sim/body.h"
-#include "models/sim/deformed_surface.h"
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
 
@@ -101,7 +101,42 @@ inline SyntheticRecording make_synthetic_recording(const std::string& folder, co
   const TriangleSoup room = synthetic_room(r, s.clutter);
 
   Simulation sim(scene, grid);
-  const DeformedSurface surface(grid);
+  // The object is the scan itself, moved by the simulated displacement field (trilinear in the
+  // grid's cells), as a real object is: not the grid's own coarser surface, which a scan
+  // registered to it would only approximate.
+  const TriangleMesh object_mesh = load_mesh(mesh_file);
+  std::vector<Eigen::Vector3d> rest;
+  for (const Eigen::Vector3d& v : object_mesh.vertices) rest.push_back(scene.object.transform.apply(v));
+  std::vector<std::array<int, 3>> object_triangles;
+  for (const Eigen::Vector3i& t : object_mesh.faces) object_triangles.push_back({t.x(), t.y(), t.z()});
+  // Each vertex's cell and place in it (a vertex in a cell the grid left out takes its nearest
+  // placed neighbour's).
+  std::vector<int> vertex_cell(rest.size(), -1);
+  std::vector<Eigen::Vector3d> vertex_local(rest.size());
+  for (size_t i = 0; i < rest.size(); ++i) vertex_cell[i] = find_cell(grid, rest[i], &vertex_local[i]);
+  std::vector<size_t> stand_in(rest.size());
+  for (size_t i = 0; i < rest.size(); ++i) {
+    stand_in[i] = i;
+    double best = 1e300;
+    for (size_t j = 0; j < rest.size() && vertex_cell[i] < 0; ++j)
+      if (vertex_cell[j] >= 0 && (rest[j] - rest[i]).squaredNorm() < best) best = (rest[j] - rest[i]).squaredNorm(), stand_in[i] = j;
+  }
+  auto moved = [&]() {
+    const double* u = sim.displacement(0);
+    std::vector<Eigen::Vector3d> out(rest.size());
+    for (size_t i = 0; i < rest.size(); ++i) {
+      const size_t j = stand_in[i];
+      Eigen::Vector3d d = Eigen::Vector3d::Zero();
+      for (int c = 0; c < 8; ++c) {
+        double w = 1;
+        for (int a = 0; a < 3; ++a) w *= ((c >> a) & 1) ? vertex_local[j][a] : 1 - vertex_local[j][a];
+        const int n = grid.cell_nodes[std::size_t(8 * vertex_cell[j] + c)];
+        d += w * Eigen::Vector3d(u[3 * n], u[3 * n + 1], u[3 * n + 2]);
+      }
+      out[i] = rest[i] + d;
+    }
+    return out;
+  };
   ObservationSet clean;
   clean.dt = frame_dt;
   clean.depth_scale = 1e-4;
@@ -122,9 +157,9 @@ inline SyntheticRecording make_synthetic_recording(const std::string& folder, co
   }
   for (int f = 0; f < s.frames; ++f) {
     while (sim.steps_taken() < f * r.substeps) sim.step();
-    const std::vector<Eigen::Vector3d> body = surface.positions(sim.displacement(0));
+    const std::vector<Eigen::Vector3d> body = moved();
     TriangleSoup frame = room;
-    frame.append(body, surface.triangles());
+    frame.append(body, object_triangles);
     const DepthImage exact = render_depth(r.camera, TriangleBvh(frame.vertices, frame.triangles), 0, 0);
     const DepthImage raw = apply_sensor_model(exact, r.camera, s.sensor, mix_seed(s.seed, std::uint64_t(f)));
     if (s.layout == "tum") {
@@ -135,7 +170,7 @@ inline SyntheticRecording make_synthetic_recording(const std::string& folder, co
     } else {
       write_depth_png((fs::path(r.folder) / fmt::format("depth/{:06d}.png", f)).string(), raw, 0.001);
     }
-    clean.frames.push_back({render_depth(r.camera, TriangleBvh(body, surface.triangles()), 0, 0)});
+    clean.frames.push_back({render_depth(r.camera, TriangleBvh(body, object_triangles), 0, 0)});
     clean.frame_times.push_back(f * frame_dt);
   }
   r.clean_observations = (fs::path(folder) / "clean").string();
