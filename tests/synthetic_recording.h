@@ -68,8 +68,6 @@ inline TriangleSoup synthetic_room(const SyntheticRecording& r, bool clutter) {
   return room;
 }
 
-inline void write_png_mm(const std::string& path, const DepthImage& img, double scale) { write_depth_png(path, img, scale); }
-
 // Writes the recording into `folder` (created), the truth scene (scene.json, with the scan
 // path absolute) beside it, and clean ssc-format observations of the object alone.
 inline SyntheticRecording make_synthetic_recording(const std::string& folder, const SyntheticRecordingSpec& s) {

@@ -214,3 +214,93 @@ TEST(PrepareRealRecording, TumDeskFrame) {
 
 }  // namespace
 }  // namespace ssc
+
+namespace ssc {
+namespace {
+
+// Data made by another code than ssc's physics: the CalculiX drop of tests/data/calculix_drops
+// (a 0.2 m cube, E = 50 kPa, dropped onto a frictionless 20 degree incline, ccx 2.20), its
+// surface frames rendered as a raw Open3D recording at 60 frames per second with the incline,
+// a back wall, a clutter box and the sensor model. The incline is the support, tilted: up comes
+// from the accelerometer (--gravity). Checks the incline's angle and offset, the cube's
+// position (a cube's pose is known up to its 24 symmetries: the nearest is compared) and the
+// initial velocity from the frames before it lands.
+TEST(PrepareSynthetic, CalculixDropOntoAnIncline) {
+  namespace fs = std::filesystem;
+  const std::string data = std::string(SSC_TEST_DATA_DIR) + "/calculix_drops/clean";
+  const fs::path dir = scratch("calculix");
+  const fs::path rec = dir / "recording";
+  fs::create_directories(rec / "depth");
+  DepthCamera cam = make_look_at_camera("ccx", 320, 240, 45, {0.55, 0.55, 1.1}, {0.2, 0.05, 0}, Eigen::Vector3d::UnitY());
+  cam.min_depth = 0.2, cam.max_depth = 8;
+  const double polar = 20 * kDeg;
+  const Eigen::Vector3d n(std::sin(polar), std::cos(polar), 0);  // the incline through the origin
+  const Eigen::Vector3d downhill = Eigen::Vector3d(std::cos(polar), -std::sin(polar), 0);
+  TriangleSoup room;
+  room.add_rectangle(-1.5 * downhill + Eigen::Vector3d(0, 0, -0.8), 3 * downhill, {0, 0, 1.6});
+  room.add_rectangle({-3, -2, -1.0}, {6, 0, 0}, {0, 4, 0});  // a back wall
+  room.add_box(Eigen::Vector3d(-0.3, 0, -0.45) + 0.06 * n, {0.06, 0.06, 0.06});  // clutter on the incline
+  const double k[9] = {cam.fx, 0, 0, 0, cam.fy, 0, cam.cx, cam.cy, 1};
+  std::ofstream(rec / "intrinsic.json")
+      << nlohmann::json{{"width", 320}, {"height", 240}, {"intrinsic_matrix", std::vector<double>(k, k + 9)}}.dump();
+  DepthSensorModel sensor;
+  for (int f = 0; f < 13; ++f) {
+    const TriangleMesh body = load_mesh(data + fmt::format("/frames/frame_{:04d}.ply", f));
+    std::vector<std::array<int, 3>> tris;
+    for (const Eigen::Vector3i& t : body.faces) tris.push_back({t.x(), t.y(), t.z()});
+    TriangleSoup frame = room;
+    frame.append(body.vertices, tris);
+    const DepthImage exact = render_depth(cam, TriangleBvh(frame.vertices, frame.triangles), 0, 0);
+    write_depth_png((rec / fmt::format("depth/{:06d}.png", f)).string(), apply_sensor_model(exact, cam, sensor, 77 + f),
+                    0.001);
+  }
+  const fs::path cube = dir / "cube.obj";
+  {
+    std::ofstream c(cube);
+    for (int i = 0; i < 8; ++i) c << "v " << ((i & 1) ? 0.1 : -0.1) << " " << ((i & 2) ? 0.1 : -0.1) << " " << ((i & 4) ? 0.1 : -0.1) << "\n";
+    c << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+  }
+  PrepareOptions o;
+  o.recording_folder = rec.string();
+  o.recording.fps = 60;
+  o.mesh = cube.string();
+  o.density = 500;
+  o.noise = SensorNoise{sensor.sigma0, sensor.per_m2};
+  const Eigen::Matrix3d c2w = cam.camera_to_world.topLeftCorner<3, 3>();
+  o.gravity = c2w.transpose() * Eigen::Vector3d(0, 9.81, 0);  // the accelerometer at rest reads "up"
+  clear_warnings();
+  const PreparedRecording p = prepare_recording(o);
+  // The incline in the truth's frame: the prepared support plane's normal and offset mapped back.
+  const Eigen::Matrix4d truth_w2c = cam.camera_to_world.inverse();
+  const Plane truth = truth_plane_in_camera(cam, n, 0.0);
+  const PreparedPlane* support = nullptr;
+  for (const PreparedPlane& plane : p.planes)
+    if (plane.support) support = &plane;
+  ASSERT_NE(support, nullptr);
+  const double angle = std::acos(std::min(1.0, support->camera.normal.dot(truth.normal))) / kDeg;
+  const double tilt = std::acos(std::min(1.0, support->normal.y())) / kDeg;
+  // The cube's centre: the truth is frame 0's body (the ccx mesh's vertex centroid, a cube's centre).
+  const TriangleMesh first = load_mesh(data + "/frames/frame_0000.ply");
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& v : first.vertices) centre += v;
+  centre /= double(first.vertices.size());
+  const Eigen::Matrix4d est_w2c = p.camera_to_world.inverse();
+  const Eigen::Vector3d truth_c = truth_w2c.topLeftCorner<3, 3>() * centre + truth_w2c.topRightCorner<3, 1>();
+  const Eigen::Vector3d est_c = est_w2c.topLeftCorner<3, 3>() * p.poses[0]->apply(p.scan.centroid) + est_w2c.topRightCorner<3, 1>();
+  const Eigen::Vector3d truth_v = truth_w2c.topLeftCorner<3, 3>() * Eigen::Vector3d(0.3, -1.5, 0);
+  const Eigen::Vector3d est_v = est_w2c.topLeftCorner<3, 3>() * p.velocity.linear;
+  std::printf("incline: %.3f deg from the truth, %.2f deg from level (truth 20), %.2f mm; cube centre %.2f mm; velocity "
+              "%.1f %% of %.2f m/s from %d frames\n", angle, tilt, 1000 * std::abs(support->camera.offset - truth.offset),
+              1000 * (est_c - truth_c).norm(), 100 * (est_v - truth_v).norm() / truth_v.norm(), truth_v.norm(),
+              p.velocity.frames);
+  EXPECT_LT(angle, 1.0);
+  EXPECT_NEAR(tilt, 20.0, 1.0);
+  EXPECT_LT(std::abs(support->camera.offset - truth.offset), 0.003);
+  EXPECT_LT((est_c - truth_c).norm(), 0.005);
+  EXPECT_LT((est_v - truth_v).norm(), 0.1 * truth_v.norm());
+  EXPECT_GE(p.velocity.frames, 2);
+  for (size_t f = 0; f < p.object_pixels.size(); ++f) EXPECT_GT(p.object_pixels[f], 300) << "frame " << f;
+}
+
+}  // namespace
+}  // namespace ssc

@@ -253,8 +253,8 @@ PreparedRecording prepare_recording(const PrepareOptions& o) {
                                     "in the observations", where, lost.size(), frames, list, lost.size() > 10 ? ", ..." : ""));
   }
 
-  // Initial velocity from the first frames of free flight: before the scan comes within a
-  // centimetre (and the noise band) of the support.
+  // Initial velocity from the first frames of free flight: before the scan comes within the
+  // noise band (at least 5 mm) of the support.
   stage(o, "estimating the initial velocity");
   const PreparedPlane& floor = p.planes[std::size_t(support)];
   std::vector<RigidPose> flight;
@@ -265,7 +265,7 @@ PreparedRecording prepare_recording(const PrepareOptions& o) {
     double lowest = 1e300;
     for (const Eigen::Vector3d& q : p.scan.points)
       lowest = std::min(lowest, floor.normal.dot(p.poses[std::size_t(f)]->apply(q)) - floor.height);
-    if (lowest < 0.01 + noise_band(o.noise, object.centroid.z(), rec.depth_scale) && f > 0) break;
+    if (lowest < std::max(0.005, noise_band(o.noise, object.centroid.z(), rec.depth_scale)) && f > 0) break;
     flight.push_back(*p.poses[std::size_t(f)]);
     times.push_back(p.timing.frame_index[std::size_t(f)] * frame_dt);
   }
