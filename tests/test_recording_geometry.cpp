@@ -204,6 +204,9 @@ TEST(ObjectSelection, SizeDecidesAndMillimetreScansAreNamed) {
   parts[2].extent = 0.1;
   expect_input_error([&] { select_object_part(parts, 0.15, 1, std::nullopt, "rec"); }, {"several candidates", "--pick"});
   EXPECT_EQ(select_object_part(parts, 0.15, 1, Eigen::Vector2d(52, 41), "rec"), 1);
+  // A part of the object's size at the image border (a hand, clutter cut by the frame) gives way.
+  parts[2].touches_border = true;
+  EXPECT_EQ(select_object_part(parts, 0.15, 1, std::nullopt, "rec"), 1);
   expect_input_error([&] { select_object_part({}, 0.15, 1, std::nullopt, "rec"); }, {"no object found"});
 }
 
