@@ -35,6 +35,7 @@ struct SyntheticRecordingSpec {
   int frames = 14;
   DepthSensorModel sensor;
   bool clutter = true;
+  bool hand = false;              // a box of the object's size moving in at the image's left border
   double youngs_modulus = 3e4, density = 300;
   Eigen::Vector3d position{0.02, 0.12, 0.0}, rotation_deg{8, 35, -6};
   Eigen::Vector3d velocity{-0.35, 0.5, 0.25}, angular_velocity{0.5, 3.0, 1.5};
@@ -158,6 +159,10 @@ inline SyntheticRecording make_synthetic_recording(const std::string& folder, co
     const std::vector<Eigen::Vector3d> body = moved();
     TriangleSoup frame = room;
     frame.append(body, object_triangles);
+    if (s.hand) {  // at the left border, 0.7 m from the camera, drifting into the view
+      const Eigen::Vector3d at = unproject(r.camera, 6 + 1.5 * f, 0.45 * s.height, 0.7);
+      frame.add_box(at, {0.04, 0.06, 0.03}, Eigen::AngleAxisd(0.2 * f, Eigen::Vector3d::UnitZ()).toRotationMatrix());
+    }
     const DepthImage exact = render_depth(r.camera, TriangleBvh(frame.vertices, frame.triangles), 0, 0);
     const DepthImage raw = apply_sensor_model(exact, r.camera, s.sensor, mix_seed(s.seed, std::uint64_t(f)));
     if (s.layout == "tum") {
