@@ -1,15 +1,19 @@
 // `ssc prepare`: from a raw depth recording of an object thrown or dropped in a room, and a
 // scan of that object, to what `reconstruct` and `diagnose` take (docs/cli.md#prepare):
 //
-//   1. read the recording (depth_recording.h) and put its timestamps on a regular time axis;
+//   1. read the recording (depth_recording.h) and put its timestamps on a regular time axis
+//      (frame_timing.h);
 //   2. find the room's large planes by RANSAC over the static background (plane_fit.h);
-//   3. segment frame 0 (segmentation.h) and pick the part whose size matches the scan;
-//   4. the world frame: up from the accelerometer (--gravity) or the floor-like plane under
-//      the object, origin on the plane under the object (world_frame.h);
-//   5. register the scan to frame 0 (registration.h), track it through the frames by ICP,
-//      and estimate the initial velocity from the first frames (motion_estimate.h);
-//   6. the planes the object can reach become contact planes; the observations keep the
-//      object's depth only (prepare_output.h writes scene.json, observations/, pictures).
+//   3. segment frame 0 (segmentation.h) and pick the part whose size matches the scan
+//      (object_selection.h);
+//   4. the world frame: up from the accelerometer (--gravity) or the level plane under the
+//      object, origin on the plane under the object (scene_planes.h, world_frame.h);
+//   5. register the scan to frame 0 (registration.h), track it through the frames
+//      (object_tracking.h), and estimate the initial velocity from the first frames of free
+//      flight (motion_estimate.h);
+//   6. the planes the object can reach become contact planes (scene_planes.h); the scene, the
+//      observations (the object's depth only) and prepare.json are made by prepare_output.cpp,
+//      the pictures by prepare_pictures.h.
 //
 // Every failure is an InputError naming what was looked for, what was found and the fix.
 #pragma once
