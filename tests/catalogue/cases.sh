@@ -16,7 +16,10 @@
 #
 # Fixtures: ball.json (sphere r = 0.1 m at y = 0.15 over the ground, grid.resolution 8,
 # dt 0.02 s, 4 steps, one 16x16 camera), mesh.json + cube.obj/.ply/.stl (0.2 m cube),
-# sdf.json + ball.sdf (6^3 nodes), torus.json (thin torus).
+# sdf.json + ball.sdf (6^3 nodes), torus.json (thin torus), recording/ (a raw Open3D-layout depth
+# recording for `ssc prepare`: a 0.2 m cube (cube.obj at --scan-scale 0.2) thrown above a table
+# with clutter, 160x120, 5 frames at 30 fps, synthetic with a sensor model; written by
+# PrepareCli.DISABLED_WritesTheCatalogueRecording in tests/test_prepare_cli.cpp).
 
 SIM='ssc simulate scene.json --out out'
 GRAD='ssc gradient ball.json --observations obs --params youngs_modulus'
