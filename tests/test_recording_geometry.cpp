@@ -212,3 +212,54 @@ TEST(ObjectSelection, SizeDecidesAndMillimetreScansAreNamed) {
 
 }  // namespace
 }  // namespace ssc
+
+namespace ssc {
+namespace {
+
+TEST(MotionEstimate, TorqueFreeSpinOfAnAsymmetricBody) {
+  // A body with three different principal moments, spinning off its principal axes: its angular
+  // velocity precesses, so a constant spin fits the rotations only roughly; the torque-free
+  // model recovers the start exactly.
+  const Eigen::Matrix3d inertia = Eigen::Vector3d(1.0, 2.0, 3.5).asDiagonal();
+  const Eigen::Vector3d w0(1.0, 4.0, -2.0), centre(0, 0, 0), g(0, -9.81, 0);
+  const Eigen::Matrix3d r0 = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  std::vector<RigidPose> poses;
+  std::vector<double> times;
+  for (int f = 0; f < 5; ++f) {
+    RigidPose p;
+    p.rotation = torque_free_rotation(r0, w0, inertia, f / 30.0, 1e-5);
+    poses.push_back(p);
+    times.push_back(f / 30.0);
+  }
+  const RigidVelocity constant = estimate_velocity(poses, times, centre, g);
+  const RigidVelocity free = estimate_velocity(poses, times, centre, g, inertia);
+  std::printf("constant spin: %.2f %% off; torque-free: %.2g %% off\n", 100 * (constant.angular - w0).norm() / w0.norm(),
+              100 * (free.angular - w0).norm() / w0.norm());
+  EXPECT_GT((constant.angular - w0).norm(), 0.01 * w0.norm()) << "the test body must precess visibly";
+  EXPECT_LT((free.angular - w0).norm(), 1e-4 * w0.norm());
+  // The integrator: a spin about a principal axis is a constant rotation.
+  const Eigen::Matrix3d about_z = torque_free_rotation(Eigen::Matrix3d::Identity(), {0, 0, 3}, inertia, 0.5);
+  EXPECT_NEAR((about_z - Eigen::AngleAxisd(1.5, Eigen::Vector3d::UnitZ()).toRotationMatrix()).norm(), 0, 1e-9);
+}
+
+TEST(ScanRegistration, InertiaOfABox) {
+  // A 0.2 x 0.4 x 0.6 box: I_xx = V (b^2 + c^2) / 12 per unit density.
+  TriangleMesh box;
+  for (int i = 0; i < 8; ++i) box.vertices.push_back({(i & 1) ? 0.1 : -0.1, (i & 2) ? 0.2 : -0.2, (i & 4) ? 0.3 : -0.3});
+  for (const auto& q : std::vector<std::array<int, 4>>{{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}}) {
+    box.faces.push_back({q[0], q[1], q[2]});
+    box.faces.push_back({q[0], q[2], q[3]});
+  }
+  const ScanModel m = make_scan_model(box, 1.0, 500);
+  const double V = 0.2 * 0.4 * 0.6;
+  EXPECT_NEAR(m.volume, V, 1e-12);
+  EXPECT_NEAR(m.centroid.norm(), 0, 1e-12);
+  EXPECT_NEAR(m.inertia(0, 0), V * (0.16 + 0.36) / 12, 1e-12);
+  EXPECT_NEAR(m.inertia(1, 1), V * (0.04 + 0.36) / 12, 1e-12);
+  EXPECT_NEAR(m.inertia(2, 2), V * (0.04 + 0.16) / 12, 1e-12);
+  EXPECT_NEAR(m.inertia(0, 1), 0, 1e-12);
+  EXPECT_EQ(m.open_edges, 0);
+}
+
+}  // namespace
+}  // namespace ssc

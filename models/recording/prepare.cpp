@@ -148,7 +148,7 @@ PreparedRecording prepare_recording(const PrepareOptions& o) {
     flight.push_back(*p.poses[std::size_t(f)]);
     times.push_back(p.timing.frame_index[std::size_t(f)] * p.timing.frame_dt);
   }
-  p.velocity = estimate_velocity(flight, times, p.scan.centroid, gravity);
+  p.velocity = estimate_velocity(flight, times, p.scan.centroid, gravity, p.scan.inertia);
   if (p.velocity.frames < 2)
     warn("no_initial_velocity", fmt::format("{}: the object is in free flight in fewer than 2 frames: the initial "
                                             "velocity is set to 0; fit it (--fit youngs_modulus,initial.linear_velocity)",

@@ -15,6 +15,7 @@ ScanModel make_scan_model(const TriangleMesh& mesh, double scale, int samples, s
   std::vector<double> area_cdf;
   double area = 0, signed_volume = 0;
   Eigen::Vector3d area_centroid = Eigen::Vector3d::Zero(), volume_moment = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d second_moment = Eigen::Matrix3d::Zero();  // the integral of x x^T over the volume
   std::map<std::pair<int, int>, int> edges;
   for (const Eigen::Vector3i& f : mesh.faces) {
     const Eigen::Vector3d a = scale * mesh.vertices[std::size_t(f.x())], b = scale * mesh.vertices[std::size_t(f.y())],
@@ -26,6 +27,8 @@ ScanModel make_scan_model(const TriangleMesh& mesh, double scale, int samples, s
     const double v6 = a.dot(b.cross(c));  // six times the signed volume of (0, a, b, c)
     signed_volume += v6 / 6;
     volume_moment += v6 / 6 * (a + b + c) / 4;
+    const Eigen::Vector3d sum = a + b + c;  // the tetrahedron (0, a, b, c)'s second moment
+    second_moment += v6 / 120 * (a * a.transpose() + b * b.transpose() + c * c.transpose() + sum * sum.transpose());
     for (int e = 0; e < 3; ++e) {
       int i = f[e], j = f[(e + 1) % 3];
       if (i > j) std::swap(i, j);
@@ -38,6 +41,9 @@ ScanModel make_scan_model(const TriangleMesh& mesh, double scale, int samples, s
   if (std::abs(signed_volume) > 1e-9 * std::pow(area, 1.5)) {
     m.volume = std::abs(signed_volume);
     m.centroid = volume_moment / signed_volume;
+    const double sign = signed_volume < 0 ? -1.0 : 1.0;
+    const Eigen::Matrix3d central = sign * second_moment - m.volume * m.centroid * m.centroid.transpose();
+    m.inertia = central.trace() * Eigen::Matrix3d::Identity() - central;
   } else {
     m.centroid = area_centroid / std::max(area, 1e-300);
   }

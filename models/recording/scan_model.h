@@ -15,6 +15,7 @@ struct ScanModel {
   std::vector<Eigen::Vector3d> points, normals;  // scan frame, scaled
   Eigen::Vector3d centroid{0, 0, 0};             // of the enclosed volume (of the surface if it encloses none)
   double volume = 0;                             // m^3 (approximate for a scan with holes)
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  // per unit density, about the centroid, scan frame (m^5)
   Eigen::Vector3d extents{0, 0, 0};              // along its principal axes, largest first
   Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();  // principal axes (columns), largest spread first
   int open_edges = 0;                            // edges with other than two faces
