@@ -23,6 +23,7 @@ set(SSC_TESTS_unit
   ExtensionTable PlausibleRanges RunRecord WriteErrors MeasurementCorrection
   Layering OutputFolder ParameterNames ParameterTable Pcg ReportHtml SceneFiles Units
   NvrtcCache NvrtcCompile
+  RecordingReaders FrameTiming PlaneFit WorldFrame ScanRegistration MotionEstimate Segmentation ObjectSelection
   GpuForward.ReportsMissingGpuCleanly GpuKernels.GroupsCoverThePlanOnce)
 
 set(SSC_TESTS_physics
@@ -30,11 +31,11 @@ set(SSC_TESTS_physics
   PhysicsBatch PhysicsBounce PhysicsCantilever PhysicsFreeFall PhysicsGrid PhysicsRigidMotion StiffContact
   EnergyAudit MatchCheck RunChecks
   ReconstructionEndToEnd ReconstructionFailures ReconstructionLeastSquares
-  FrameTimes FrictionSlope GoodnessOfFit RestingStart TablePoints CalculixDrops
+  FrameTimes FrictionSlope GoodnessOfFit RestingStart TablePoints CalculixDrops PrepareSynthetic PrepareRealRecording
   GpuForward.ExplodingGradientFailsCleanlyOnTheCpu GpuKernels.RandomStateAndEveryAdjointGroupOnTheCpu)
 
 set(SSC_TESTS_cli
-  CliSimulate DiagnoseCli ExtensionFit FrictionFit GoodnessOfFitCli Render CalculixDropsFit
+  CliSimulate DiagnoseCli ExtensionFit FrictionFit GoodnessOfFitCli Render CalculixDropsFit PrepareCli
   ReportHtml.ChromiumDrawsThePage)
 
 set(SSC_TESTS_slow
@@ -44,6 +45,7 @@ set(SSC_TESTS_slow
   ExtensionFit.NeoHookeanYoungsModulusFromASmallerTimeStep ExtensionFit.SecondPlaneFromAFinerSimulation
   FrictionFit.ReconstructRecoversMuFromAFinerSimulation
   NeoHookean.LargeDeflectionCantileverAgainstCalculix
+  PrepareCli.PrepareThenReconstructRecoversYoungsModulus
   NvrtcCompile.AllExampleKernelsDoubleAndFloat)
 
 set(SSC_TESTS_gpu

@@ -16,7 +16,10 @@
 #
 # Fixtures: ball.json (sphere r = 0.1 m at y = 0.15 over the ground, grid.resolution 8,
 # dt 0.02 s, 4 steps, one 16x16 camera), mesh.json + cube.obj/.ply/.stl (0.2 m cube),
-# sdf.json + ball.sdf (6^3 nodes), torus.json (thin torus).
+# sdf.json + ball.sdf (6^3 nodes), torus.json (thin torus), recording/ (a raw Open3D-layout depth
+# recording for `ssc prepare`: a 0.2 m cube (cube.obj at --scan-scale 0.2) thrown above a table
+# with clutter, 160x120, 5 frames at 30 fps, synthetic with a sensor model; written by
+# PrepareCli.DISABLED_WritesTheCatalogueRecording in tests/test_prepare_cli.cpp).
 
 SIM='ssc simulate scene.json --out out'
 GRAD='ssc gradient ball.json --observations obs --params youngs_modulus'
@@ -349,6 +352,40 @@ def signal.term-replace 143 'SIGTERM' 'SIGTERM while replacing an earlier output
   'fixture ball.json; ssc simulate ball.json --out out --no-frames 2>/dev/null' 'set -m; ssc simulate ball.json --out out '"$SLOW"' & p=$!; track $p; wait_for .out.ssc-tmp-$p || exit 99; sleep 0.5; kill -TERM $p; wait $p'
 def signal.int-while-writing 130 'SIGINT' 'simulate writing frames, stopped with SIGINT 25 times at varying moments: nothing left behind any time' \
   'fixture ball.json' 'set -m; for i in $(seq 25); do ssc simulate ball.json --out out --set time.steps=1000000 2>/dev/null & p=$!; track $p; wait_for .out.ssc-tmp-$p/frames || exit 99; sleep 0.0$((i % 10)); kill -INT $p; wait $p; rc=$?; left=$(ls -A | grep -vx -e ball.json -e precious.txt); [[ $rc == 130 && -z $left ]] || { echo "catalogue: try $i: exit $rc, left: $left" >&2; exit 98; }; done; echo "interrupted by SIGINT 25 times, nothing left" >&2; exit 130'
+
+# ---- ssc prepare: raw recordings (fixtures/recording: a 0.2 m cube thrown onto a table, Open3D layout) ----
+PREP='ssc prepare rec --mesh cube.obj --fps 30 --density 300 --resolution 6 --out out'
+REC='cp -r "$FIX/recording" rec; fixture cube.obj'
+def prepare.no-object 2 'no object found && --scan-scale' 'prepare with a scan 8 times the object'"'"'s size: no part of the first frame matches it' \
+  "$REC" "$PREP --scan-scale 1.6"
+def prepare.scan-millimetres 2 'millimetres && --scan-scale 0.2' 'prepare with a scan in millimetres (a thousand times the object)' \
+  "$REC" "$PREP --scan-scale 200"
+def prepare.several-candidates 2 'several candidates && --pick' 'prepare on 2 frames (no static background to tell the clutter boxes from the object)' \
+  "$REC" "$PREP --scan-scale 0.2 --frames 0:2"
+def prepare.no-plane 2 'no plane under the object && --gravity' 'prepare with --gravity pointing down (no level plane under the object)' \
+  "$REC" "$PREP --scan-scale 0.2 --gravity 0,9.81,0"
+def prepare.intrinsics-size 2 '--intrinsics && principal point && 160x120' 'prepare with the intrinsics of a 640x480 camera on 160x120 images' \
+  "$REC" "$PREP --scan-scale 0.2 --intrinsics 525,525,319.5,239.5"
+def prepare.intrinsics-file-size 2 'intrinsic.json && 640x480 && 160x120' 'an intrinsic.json for 640x480 images beside 160x120 frames' \
+  "$REC"'; edit rec/intrinsic.json "\"height\": 120" "\"height\": 480" "\"width\": 160" "\"width\": 640"' "$PREP --scan-scale 0.2"
+def prepare.intrinsics-missing 2 'intrinsic.json is missing && --intrinsics' 'an Open3D recording without its intrinsic.json' \
+  "$REC"'; rm rec/intrinsic.json' "$PREP --scan-scale 0.2 --format open3d"
+def prepare.intrinsics-row-major 2 'intrinsic.json && intrinsic_matrix && column-major' 'an intrinsic_matrix written row-major' \
+  "$REC"'; printf "{\"width\": 160, \"height\": 120, \"intrinsic_matrix\": [115, 0, 79.5, 0, 115, 59.5, 0, 0, 1]}" > rec/intrinsic.json' "$PREP --scan-scale 0.2"
+def prepare.fps-missing 2 '--fps && timestamps' 'an Open3D recording (no timestamps) without --fps' \
+  "$REC" 'ssc prepare rec --mesh cube.obj --scan-scale 0.2 --out out'
+def prepare.depth-scale-inverted 2 '--depth-scale && 0.001' '--depth-scale 1000 (units per metre, as Open3D writes it, instead of metres per unit)' \
+  "$REC" "$PREP --scan-scale 0.2 --depth-scale 1000"
+def prepare.irregular-timestamps 2 'depth.txt && irregular timestamps && frames 2 and 3' 'a TUM depth.txt whose fourth frame comes half an interval late' \
+  "$REC"'; printf "# timestamp filename\n0.000 depth/000000.png\n0.033 depth/000001.png\n0.066 depth/000002.png\n0.116 depth/000003.png\n0.149 depth/000004.png\n" > rec/depth.txt' \
+  'ssc prepare rec --mesh cube.obj --scan-scale 0.2 --depth-scale 0.001 --density 300 --out out'
+def prepare.missing-frame 2 'depth.txt && line 3 && does not exist' 'a TUM depth.txt naming a frame file that is missing' \
+  "$REC"'; printf "# timestamp filename\n0.000 depth/000000.png\n0.033 depth/000007.png\n" > rec/depth.txt' \
+  'ssc prepare rec --mesh cube.obj --scan-scale 0.2 --depth-scale 0.001 --density 300 --out out'
+def prepare.mass-and-density 2 '--mass && --density && not both' 'prepare with both --mass and --density' \
+  "$REC" "$PREP --scan-scale 0.2 --mass 2"
+def prepare.scan-not-closed 0 'not closed' 'a scan with a face missing: a warning, the folder is written' \
+  "$REC"'; grep -v "^f 2 7 6" cube.obj > open.obj' 'ssc prepare rec --mesh open.obj --scan-scale 0.2 --fps 30 --density 300 --resolution 6 --out out' writes
 
 # ---- progress, notes and warnings on stderr ----
 def progress.quiet 0 '' 'residuals, kernels and gradient with --quiet (and an unknown key in cameras.json): nothing on stderr, the warning only in the JSON' \

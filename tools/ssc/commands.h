@@ -17,5 +17,6 @@ Command register_reconstruct(CLI::App& app);
 Command register_kernels(CLI::App& app);
 Command register_residuals(CLI::App& app);
 Command register_diagnose(CLI::App& app);
+Command register_prepare(CLI::App& app);
 
 }  // namespace ssc

@@ -72,6 +72,7 @@ int main(int argc, char** argv) {
   add(ssc::register_kernels);
   add(ssc::register_residuals);
   add(ssc::register_diagnose);
+  add(ssc::register_prepare);
   if (argc > 1 && argv[1][0] != '-') {
     std::string names;
     bool known = false;
