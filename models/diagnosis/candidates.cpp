@@ -121,9 +121,17 @@ std::vector<ModelSpec> plane_proposals(const FittedModel& base, int heldin, int 
       return -directions[d].dot(plane.normal.normalized()) > kParallelPlane;
     });
   };
+  // A plane the body would start beyond (it went that way and came back, say) is no proposal:
+  // the scene could not even start. Half a cell of room, as the soft-min contact needs.
+  auto clear_of_start = [&](size_t d) {
+    double rest = -1e300;
+    for (int i = 0; i < p.grid.node_count; ++i)
+      rest = std::max(rest, p.grid.sdf.node_position(p.grid.node_grid[size_t(i)]).dot(directions[d]));
+    return rest + 0.5 * p.grid.h < observed_at[d];
+  };
   std::vector<size_t> order;
   for (size_t d = 0; d < D; ++d)
-    if (over[d] > 0.5 * p.grid.h && new_surface(d)) order.push_back(d);
+    if (over[d] > 0.5 * p.grid.h && new_surface(d) && clear_of_start(d)) order.push_back(d);
   std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return over[a] > over[b]; });
   std::vector<size_t> chosen;
   for (size_t d : order)
