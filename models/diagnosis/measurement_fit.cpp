@@ -24,29 +24,36 @@ constexpr int kScan = 41, kGolden = 30, kMostRefits = 2;
 // Keeping every step's state of a larger body or a longer run would take too much memory.
 constexpr double kMostTrackBytes = 2e9;
 
-// Every step's displacement (active nodes) and band displacement, from the rest state on.
+// The displacement (active nodes) and band displacement of the steps kept (every step for a
+// time offset, else the frames' steps; the others stay empty), from the rest state on.
 struct MotionTrack {
   std::vector<std::vector<double>> u, band;
 };
 
-MotionTrack track_motion(const Problem& p, const PhysicalParameters& params, int last_step, const std::string& device) {
+MotionTrack track_motion(const Problem& p, const PhysicalParameters& params, const std::vector<char>& keep,
+                         const std::string& device) {
   const SimGrid& g = p.grid;
-  const double bytes = 8.0 * 3 * double(g.node_count + g.band_count) * (last_step + 1);
+  const int last_step = int(keep.size()) - 1;
+  const double bytes = 8.0 * 3 * double(g.node_count + g.band_count) * double(std::count(keep.begin(), keep.end(), 1));
   if (bytes > kMostTrackBytes)
-    throw SimulationError(fmt::format("keeping the {} steps' states would take {:.1f} GB", last_step + 1, bytes / 1e9));
+    throw SimulationError(fmt::format("keeping {} steps' states would take {:.1f} GB",
+                                      std::count(keep.begin(), keep.end(), 1), bytes / 1e9));
   Scene scene = p.scene;
   scene.time.steps = std::max(scene.time.steps, last_step);
   Simulation sim(scene, g, 1, true);
   if (device == "cuda") sim.use_gpu();
   sim.set_parameters(0, params);
   MotionTrack t;
+  t.u.resize(keep.size());
+  t.band.resize(keep.size());
   const size_t nu = 3 * size_t(g.node_count), nb = 3 * size_t(g.band_count);
-  t.u.emplace_back(sim.displacement(0), sim.displacement(0) + nu);
-  t.band.emplace_back(nb, 0.0);
+  t.u[0].assign(sim.displacement(0), sim.displacement(0) + nu);
+  t.band[0].assign(nb, 0.0);
   for (int k = 1; k <= last_step; ++k) {
     sim.step();
-    t.u.emplace_back(sim.displacement(0), sim.displacement(0) + nu);
-    t.band.emplace_back(sim.band_displacement(0), sim.band_displacement(0) + nb);
+    if (!keep[size_t(k)]) continue;
+    t.u[size_t(k)].assign(sim.displacement(0), sim.displacement(0) + nu);
+    t.band[size_t(k)].assign(sim.band_displacement(0), sim.band_displacement(0) + nb);
   }
   return t;
 }
@@ -88,8 +95,9 @@ double held_in_cost(const Problem& p, const std::vector<std::vector<CameraPoints
   double sum = 0;
   for (size_t f = 0; f < points.size(); ++f) {
     const double s = std::clamp(p.frames[f].step + m.time_offset / dt, 0.0, double(track.u.size() - 1));
-    const size_t k0 = size_t(std::floor(s)), k1 = std::min(k0 + 1, track.u.size() - 1);
+    const size_t k0 = size_t(std::floor(s));
     const double w = s - double(k0);
+    const size_t k1 = w > 0 ? std::min(k0 + 1, track.u.size() - 1) : k0;
     u.resize(track.u[k0].size());
     band.resize(track.band[k0].size());
     for (size_t i = 0; i < u.size(); ++i) u[i] = (1 - w) * track.u[k0][i] + w * track.u[k1][i];
@@ -153,11 +161,14 @@ FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, co
   int last_step = 0;
   for (int f = 0; f < c.heldin && f < int(recorded.frames.size()); ++f)
     last_step = std::max(last_step, recorded.frames[size_t(f)].step);
-  if (parameter == "camera.time_offset") {
+  const bool clock = parameter == "camera.time_offset";
+  if (clock) {
     // No frame may move before the start; the motion is tracked as far as the latest frame can go.
     lo = std::max(lo, -recorded.frames.front().step * dt);
     last_step += int(std::ceil(hi / dt)) + 1;
   }
+  std::vector<char> keep(size_t(last_step) + 1, clock ? 1 : 0);
+  for (int f = 0; f < c.heldin && f < int(recorded.frames.size()); ++f) keep[size_t(recorded.frames[size_t(f)].step)] = 1;
   const SurfaceConstraintCost cost(recorded.grid, recorded.phi_max);
   const std::vector<std::vector<CameraPoints>> points = camera_points(recorded.observations, c.heldin);
 
@@ -178,7 +189,7 @@ FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, co
     for (const PhysicalParameters& motion : motions) {
       MotionTrack track;
       try {
-        track = track_motion(recorded, motion, last_step, c.options.device);
+        track = track_motion(recorded, motion, keep, c.options.device);
       } catch (const SimulationError& e) {
         failure = e.what();
         continue;
