@@ -20,7 +20,7 @@ set(SSC_TESTS_unit
   OpAdjointNodal OpAdjointPolar OpAdjointTrilinear OpChecks
   OptimBest OptimConvergence OptimFactory OptimRules OptimStopping ParameterSpaceNames ParameterSpaceTransforms
   ReconstructionStarts LevenbergMarquardt ParameterBounds
-  ExtensionTable PlausibleRanges RunRecord WriteErrors MeasurementCorrection
+  ExtensionTable PlausibleRanges RunRecord WriteErrors MeasurementCorrection SvgPlot
   Layering OutputFolder ParameterNames ParameterTable Pcg ReportHtml SceneFiles Units
   NvrtcCache NvrtcCompile
   RecordingReaders FrameTiming PlaneFit WorldFrame ScanRegistration MotionEstimate Segmentation ObjectSelection

@@ -55,6 +55,12 @@ std::vector<double> ticks(const Axis& a) {
       const double v = m * std::pow(10.0, e);
       if (v >= a.lo && v <= a.hi) t.push_back(v);
     }
+  // A range within one decade may hold none of 1, 2, 5 x 10^e, or one: round linear values then.
+  if (t.size() < 2) {
+    t.clear();
+    for (double v : plot_ticks(a.lo, a.hi))
+      if (v > 0) t.push_back(v);
+  }
   return t;
 }
 
