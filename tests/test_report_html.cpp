@@ -147,6 +147,17 @@ TEST(ReportHtml, RendersEverySectionAndFigureOfASyntheticReport) {
   EXPECT_EQ(count_of(html, "<tr class=\"pass\">"), 1u);
 }
 
+// `ssc residuals` reports one model: no "after" column, in the images or on the rest shape.
+TEST(ReportHtml, OneModelHasNoEmptyAfterColumn) {
+  json report = synthetic_report();
+  report["rest_shape"].erase("after_mm");
+  for (json& image : report["residual_images"]) image.erase("after_mm");
+  const std::string html = render_report_html(report);
+  EXPECT_EQ(count_of(html, "class=\"rest-shape\""), 1u);
+  EXPECT_EQ(count_of(html, "class=\"residual-image\""), 2u);
+  EXPECT_EQ(count_of(html, ">after</div>"), 0u);
+}
+
 TEST(ReportHtml, MissingKeysNullsAndNanDoNotThrow) {
   std::string html;
   ASSERT_NO_THROW(html = render_report_html(json{{"title", "x"}}));

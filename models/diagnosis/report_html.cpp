@@ -449,7 +449,8 @@ std::string rest_shape_html(const json& data) {
                                  points.size());
   html += colour_bar_svg(range, "no residual") + "<div class=\"pair\">\n";
   for (const auto& [label, values] : {std::pair{"before", &before}, std::pair{"after", &after}})
-    html += fmt::format("<figure><div class=\"label\">{}</div>{}</figure>\n", label, rest_shape_svg(points, *values, range));
+    if (!values->empty())  // `ssc residuals` has one model: no "after"
+      html += fmt::format("<figure><div class=\"label\">{}</div>{}</figure>\n", label, rest_shape_svg(points, *values, range));
   return html + "</div>\n";
 }
 
