@@ -158,6 +158,20 @@ TEST(ReportHtml, OneModelHasNoEmptyAfterColumn) {
   EXPECT_EQ(count_of(html, ">after</div>"), 0u);
 }
 
+// The gain chart's name column fits the longest name in bold: it starts inside the chart.
+TEST(ReportHtml, TheWinningLabelIsNotCutAtTheLeft) {
+  json report = synthetic_report();
+  report["candidates"][0]["name"] = "heterogeneous_stiffness";
+  const std::string html = render_report_html(report);
+  const std::string label = " font-weight=\"bold\">heterogeneous_stiffness</text>";
+  const size_t at = html.find(label);
+  ASSERT_NE(at, std::string::npos);
+  const size_t x = html.rfind("<text x=\"", at);
+  ASSERT_NE(x, std::string::npos);
+  const double right = std::stod(html.substr(x + 9));
+  EXPECT_GE(right, 8.5 * 23) << "the right-aligned name ends at x = " << right;
+}
+
 TEST(ReportHtml, MissingKeysNullsAndNanDoNotThrow) {
   std::string html;
   ASSERT_NO_THROW(html = render_report_html(json{{"title", "x"}}));

@@ -210,7 +210,11 @@ std::string header_html(const json& data, const std::string& title) {
 // Horizontal bars of the gains (as % of the held-out residual) with their 90 % intervals, the
 // placebo gains as diamonds, and a line at 0; passing candidates in green.
 std::string gain_chart_svg(const json& candidates) {
-  const double label_width = 170, plot_width = 640, row_height = 30, top = 10;
+  // The names are right-aligned before the bars: the column fits the longest in bold (about
+  // 8.5 px a character at 13 px), so that none is cut at the left edge.
+  size_t longest = 0;
+  for (const json& c : candidates) longest = std::max(longest, text_at(c, "name").size());
+  const double label_width = std::max(170.0, 8.5 * double(longest) + 20), plot_width = 640, row_height = 30, top = 10;
   const double height = top + row_height * double(candidates.size()) + 76;
   double lo = 0, hi = 0;
   for (const json& c : candidates)
