@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -66,6 +67,20 @@ TEST_F(CalculixDropsFit, BaseFitRuns) {
   const double E = result.at("parameters").at("youngs_modulus").get<double>();
   EXPECT_TRUE(std::isfinite(E) && E > 0) << E;
   EXPECT_GT(result.at("matched_points").get<double>(), 0.5 * result.at("observed_points").get<double>());
+  // The fit's renders: the fitted body's silhouette, the observed points, a colour bar; small.
+  int renders = 0;
+  for (const auto& entry : fs::directory_iterator(fit)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("fit_frame_", 0) != 0) continue;
+    ++renders;
+    EXPECT_LT(fs::file_size(entry.path()), 200000u) << name;
+    std::ifstream in(entry.path());
+    const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(svg.find("fill=\"url(#phi)\""), std::string::npos) << name << ": no colour bar";
+    EXPECT_NE(svg.find("<rect x="), std::string::npos) << name << ": no silhouette";
+    EXPECT_NE(svg.find("<circle"), std::string::npos) << name << ": no observed point";
+  }
+  EXPECT_EQ(renders, 3);
 }
 
 // ccx's body is Neo-Hookean (E 50 kPa). ssc's corotated model must see its cost lowest at

@@ -11,6 +11,7 @@
 #include "runtime/errors.h"
 #include "models/io/text_file.h"
 #include "models/observation/camera.h"
+#include "models/observation/depth_render.h"
 #include "models/sim/deformed_surface.h"
 #include "models/sim/parameters.h"
 #include "models/sim/simulation.h"
@@ -50,18 +51,26 @@ std::vector<std::string> write_fit_renders(const OutputDir& out, const Problem& 
     const std::vector<Eigen::Vector3d> verts = surface.positions(sim.displacement(0));
     std::string svg = fmt::format(
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{0}\" height=\"{1}\" font-family=\"sans-serif\" font-size=\"12\">\n"
-        "<rect width=\"100%\" height=\"100%\" fill=\"#f8f8f8\"/>\n<g fill=\"#c9d3e0\" stroke=\"#aab6c6\" stroke-width=\"0.3\">\n",
-        cam.width * scale, cam.height * scale + 40);
-    for (const auto& t : surface.triangles()) {
-      std::string pts;
-      bool visible = true;
-      for (int k = 0; k < 3; ++k) {
-        double u, v, d;
-        visible &= project(cam, verts[t[k]], &u, &v, &d);
-        pts += fmt::format("{:.1f},{:.1f} ", (u + 0.5) * scale, (v + 0.5) * scale);
+        "<defs><linearGradient id=\"phi\"><stop offset=\"0\" stop-color=\"{2}\"/><stop offset=\"0.5\" stop-color=\"{3}\"/>"
+        "<stop offset=\"1\" stop-color=\"{4}\"/></linearGradient></defs>\n"
+        "<rect width=\"100%\" height=\"100%\" fill=\"#f8f8f8\"/>\n<g fill=\"#c9d3e0\" shape-rendering=\"crispEdges\">\n",
+        cam.width * scale, cam.height * scale + 62, residual_color(0, 1), residual_color(0.5, 1), residual_color(1, 1));
+    // The fitted surface as the camera sees it: its silhouette rendered at the camera's own
+    // resolution, one rectangle per run of covered pixels in a row (a few kB, where one
+    // polygon per surface triangle made megabytes).
+    const DepthImage seen = render_depth(cam, TriangleBvh(verts, surface.triangles()), 0.0, 0);
+    for (int v = 0; v < seen.height; ++v)
+      for (int u = 0; u < seen.width;) {
+        if (!(seen.at(u, v) > 0)) {
+          ++u;
+          continue;
+        }
+        int end = u;
+        while (end < seen.width && seen.at(end, v) > 0) ++end;
+        svg += fmt::format("<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\"/>\n", u * scale, v * scale,
+                           (end - u) * scale, scale);
+        u = end;
       }
-      if (visible) svg += fmt::format("<polygon points=\"{}\"/>\n", pts);
-    }
     svg += "</g>\n";
     int shown = 0;
     for (size_t i = 0; i < frame.points.size(); ++i) {
@@ -72,10 +81,16 @@ std::vector<std::string> write_fit_renders(const OutputDir& out, const Problem& 
                          std::max(1.0, 0.3 * scale), residual_color(phi[i], problem.phi_max));
       ++shown;
     }
+    const double bar_y = cam.height * scale + 40;
     svg += fmt::format("<text x=\"6\" y=\"{:.0f}\">frame {} (step {}, t = {:.3f} s), camera {}: {} observed points</text>\n"
-                       "<text x=\"6\" y=\"{:.0f}\">colour: |phi| from 0 (green) to phi_max = {:.3g} m (red), grey: unmatched</text>\n</svg>\n",
+                       "<text x=\"6\" y=\"{:.0f}\">distance of each observed point to the fitted surface, |phi|; grey: unmatched</text>\n"
+                       "<rect x=\"6\" y=\"{:.0f}\" width=\"200\" height=\"10\" fill=\"url(#phi)\" stroke=\"#666\" stroke-width=\"0.5\"/>"
+                       "<text x=\"6\" y=\"{:.0f}\" font-size=\"10\">0</text>"
+                       "<text x=\"206\" y=\"{:.0f}\" font-size=\"10\" text-anchor=\"end\">{:.3g} mm (phi_max)</text>"
+                       "<circle cx=\"230\" cy=\"{:.0f}\" r=\"4\" fill=\"{}\"/><text x=\"238\" y=\"{:.0f}\" font-size=\"10\">unmatched</text>\n</svg>\n",
                        cam.height * scale + 16, f, frame.step, frame.step * problem.scene.time.dt, cam.name, shown,
-                       cam.height * scale + 32, problem.phi_max);
+                       cam.height * scale + 32, bar_y, bar_y + 20, bar_y + 20, 1e3 * problem.phi_max, bar_y + 5,
+                       residual_color(std::nan(""), 1), bar_y + 9);
     const std::string name = fmt::format("fit_frame_{:04d}.svg", f);
     write_text_file(out.file(name), svg);
     written.push_back(name);
