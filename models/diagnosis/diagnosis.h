@@ -11,6 +11,8 @@
 //   candidates.h       the candidates' and placebos' models, and the proposals from the data
 //                      (planes where the fitted body goes and the observations do not; a
 //                      material interface across the fitted stiffness gradient)
+//   measurement_fit.h  the measurement candidates: cameras.json's focal lengths, depth unit
+//                      or clock corrected against the base fit's motion, then refitted
 //   score_test.h       a ranking of the candidates with an "off" value from one backward pass
 //   held_out.h         the gain on the held-out frames with a bootstrap interval; the event
 //   identifiability.h  which parameters trade one for the other at the cause's fit
