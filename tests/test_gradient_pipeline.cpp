@@ -409,6 +409,29 @@ void check_against_finite_differences(const Pipeline& pl, const char* label, dou
   std::printf("%s: worst relative error %.2e; %.2f s in all\n", label, worst, seconds_since(t0));
 }
 
+// Progress of a long evaluation: one call per forward step, then one per backward step, the
+// count rising to the total; without the gradient, the forward steps alone. The result is
+// the one without the callback.
+TEST(GradientPipeline, ReportsEveryStepOfBothPasses) {
+  const Pipeline& pl = pipeline();
+  for (bool gradient : {true, false}) {
+    Simulation sim(pl.scene, pl.grid, 1, true);
+    GradientOptions o;
+    o.gradient = gradient;
+    const double plain = evaluate_cost_gradient(sim, *pl.cost, pl.frames, o)[0].cost;
+    std::vector<std::pair<int, int>> calls;
+    o.on_step = [&](int done, int total) { calls.emplace_back(done, total); };
+    const double reported = evaluate_cost_gradient(sim, *pl.cost, pl.frames, o)[0].cost;
+    EXPECT_EQ(reported, plain);
+    const int steps = pl.frames.back().step, total = gradient ? 2 * steps : steps;
+    ASSERT_EQ(int(calls.size()), total) << gradient;
+    for (size_t i = 0; i < calls.size(); ++i) {
+      EXPECT_EQ(calls[i].second, total);
+      EXPECT_EQ(calls[i].first, int(i) + 1) << "call " << i;
+    }
+  }
+}
+
 TEST(GradientPipeline, AdjointMatchesCentralDifferencesPerParameter) {
   check_against_finite_differences(pipeline(), "sphere on tilted ground");
 }

@@ -93,9 +93,11 @@ std::vector<bool> evaluate_batch(BatchSimulations& sims, const Problem& problem,
                                  const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& points,
                                  std::vector<CostGradient>* results, std::vector<std::string>* failures,
                                  bool gradient = true, const SurfaceResiduals* residuals = nullptr,
-                                 std::vector<ResidualVector>* residual_values = nullptr) {
+                                 std::vector<ResidualVector>* residual_values = nullptr,
+                                 const std::function<void(int, int)>& on_step = {}) {
   GradientOptions options;
   options.gradient = gradient && !residuals;
+  options.on_step = on_step;
   const int n = int(points.size());
   std::vector<bool> ok(n, true);
   results->assign(n, CostGradient{});
@@ -281,7 +283,8 @@ void fit_least_squares(const Problem& problem, const ReconstructionOptions& o, c
     std::vector<std::string> failures;
     std::vector<ResidualVector> r;
     const std::vector<bool> ok =
-        evaluate_batch(sims, problem, cost, base, result.names, points, &values, &failures, false, &residuals, &r);
+        evaluate_batch(sims, problem, cost, base, result.names, points, &values, &failures, false, &residuals, &r,
+                       o.evaluation_progress);
     result.evaluations += int(points.size());
     for (size_t k = 0; k < active.size(); ++k) {
       const int s = active[k];
@@ -394,7 +397,8 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
       std::vector<CostGradient> values;
       std::vector<std::string> failures;
       const std::vector<bool> ok =
-          evaluate_batch(sims, problem, cost, base, result.names, points, &values, &failures, !o.finite_differences);
+          evaluate_batch(sims, problem, cost, base, result.names, points, &values, &failures, !o.finite_differences,
+                         nullptr, nullptr, o.evaluation_progress);
       result.evaluations += int(active.size());
       // The comparison the paper makes: central differences in the optimiser's coordinates
       // instead of the adjoint, all 2 x parameters x starts probes as one batch.

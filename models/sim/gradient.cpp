@@ -111,6 +111,7 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
     if (options.gradient && K > 0 && t % K == 0) checkpoint(t);
     if (frames_at.count(t) || t == steps) sim.sync_host();  // also checks for an explosion
     take_frame_costs(t);
+    if (options.on_step) options.on_step(t, options.gradient ? 2 * steps : steps);
   }
   if (!options.gradient) return results;
 
@@ -122,6 +123,7 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
   backend.clear_adjoints(true);
   const size_t n3 = 3 * size_t(g.node_count), b3 = 3 * size_t(g.band_count);
   for (int t = steps; t >= 1; --t) {
+    if (options.on_step) options.on_step(2 * steps - t + 1, 2 * steps);
     if (K == 0) {
       sim.load_step(t);
       sim.drop_checkpoint(t);

@@ -56,6 +56,9 @@ struct GradientOptions {
   // (default: 2 GB of host memory on the CPU; on the GPU no more than the half).
   int checkpoint_every = 0;
   double memory_budget_bytes = 0;
+  // Called at every step of the forward pass and of the backward pass with the steps done
+  // and the total (the forward's steps, twice that with the gradient): a long run's progress.
+  std::function<void(int done, int total)> on_step;
 };
 
 // One result per batch item. The simulation must have been built with extension = true.

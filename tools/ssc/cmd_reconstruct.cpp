@@ -4,6 +4,8 @@
 // judges the best fit against the depth noise (models/diagnosis/goodness_of_fit.h).
 #include <fmt/format.h>
 
+#include <chrono>
+
 #include <cmath>
 
 #include <fstream>
@@ -214,7 +216,23 @@ Command register_reconstruct(CLI::App& app) {
     out.manifest()["observations"] = folder_fingerprint(o->observations);
     out.manifest()["device"] = device == "cuda" ? gpu_description() : "cpu";
     Progress progress("reconstruct: round", o->iterations, o->progress, 0.0);
+    // Within a round: a line every 2 s of a long evaluation, with the steps done and an
+    // estimate of the evaluation's rest (a round of 1000 starts runs for tens of seconds).
+    int rounds_done = 0;
+    using Clock = std::chrono::steady_clock;
+    Clock::time_point evaluation_start = Clock::now(), last_line = evaluation_start;
+    ro.evaluation_progress = [&](int done, int total) {
+      const Clock::time_point now = Clock::now();
+      if (done <= 1) evaluation_start = now;
+      const double running = std::chrono::duration<double>(now - evaluation_start).count();
+      if (running < 2 || std::chrono::duration<double>(now - last_line).count() < 2 || done >= total) return;
+      last_line = now;
+      progress.update(std::min(rounds_done, o->iterations),
+                      fmt::format("round {} evaluating: step {} of {} ({:.0f} s, about {:.0f} s left in it)",
+                                  rounds_done + 1, done, total, running, running * (total - done) / std::max(done, 1)));
+    };
     const ReconstructionResult r = reconstruct(problem, ro, [&](int round, int active, double best, const Eigen::VectorXd& x) {
+      rounds_done = round;
       std::string values;
       for (int i = 0; i < x.size(); ++i) values += fmt::format(" {}={:.5g}", names[i], x[i]);
       progress.update(std::min(round, o->iterations), fmt::format("{} starts running, best cost {:.6g},{}", active, best, values));
