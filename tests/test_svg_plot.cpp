@@ -16,7 +16,9 @@ int count(const std::string& s, const std::string& what) {
 }
 
 TEST(SvgPlot, ALogAxisWithinOneDecadeStillHasTickLabels) {
-  PlotPanel panel{"cost", "iteration", "cost", false, true};
+  PlotPanel panel;
+  panel.title = panel.y_label = "cost";
+  panel.log_y = true;
   panel.series.push_back({"start 0", {0, 1, 2, 3}, {4.8e-5, 3.6e-5, 3.2e-5, 3.1e-5}});
   const std::string svg = svg_plot_string({panel});
   // Tick labels are right-aligned text on the y axis; 3.1e-5 .. 4.8e-5 has none of 1, 2, 5 x 10^e.
@@ -25,7 +27,9 @@ TEST(SvgPlot, ALogAxisWithinOneDecadeStillHasTickLabels) {
 }
 
 TEST(SvgPlot, ALogAxisOverDecadesKeepsItsRoundValues) {
-  PlotPanel panel{"cost", "iteration", "cost", false, true};
+  PlotPanel panel;
+  panel.title = panel.y_label = "cost";
+  panel.log_y = true;
   panel.series.push_back({"start 0", {0, 1, 2}, {1e-2, 1e-4, 3e-6}});
   const std::string svg = svg_plot_string({panel});
   EXPECT_NE(svg.find(">0.001<"), std::string::npos) << svg;

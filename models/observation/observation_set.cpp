@@ -334,8 +334,9 @@ std::string get_string(const Json& obj, const std::string& key, const std::strin
 }
 
 Eigen::Matrix4d get_pose(const Json& obj, const std::string& file, const std::string& ctx) {
-  const Json& v = get_key(obj, "camera_to_world", file, ctx);
-  const std::string name = qualified(ctx, "camera_to_world");
+  const std::string key = "camera_to_world";  // a named key: no temporary for the reference to outlive
+  const Json& v = get_key(obj, key, file, ctx);
+  const std::string name = qualified(ctx, key);
   if (!v.is_array() || v.size() != 16)
     throw InputError(fmt::format("{}: key '{}' must be an array of 16 numbers (row-major 4x4 camera-to-world "
                                  "pose), got {}", file, name, v.dump()));
@@ -430,7 +431,8 @@ ObservationSet parse_header(const Json& j, const std::string& file) {
                                                         : set.frame_times[0];
   std::optional<DepthNoise> shared_noise;
   if (j.contains("depth_noise")) shared_noise = parse_depth_noise(j["depth_noise"], file, "depth_noise");
-  const Json& cams = get_key(j, "cameras", file, "");
+  const std::string cameras_key = "cameras", top = "";  // named: no temporary for the reference to outlive
+  const Json& cams = get_key(j, cameras_key, file, top);
   if (!cams.is_array()) throw InputError(fmt::format("{}: key 'cameras' must be an array of cameras", file));
   bool any_noise = bool(shared_noise);
   for (std::size_t i = 0; i < cams.size(); ++i) {
