@@ -221,7 +221,7 @@ FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, co
     fm.name = row.name;
     fm.extra = {parameter};
   }
-  if (parameter == "camera.time_offset") value = std::round(value / dt) * dt;
+  if (clock) value = std::round(value / dt) * dt;
   // The model as scored: the corrected frames with the parameters it ends with.
   fm.problem = base.problem;
   apply_measurement(fm.problem, measurement_correction(parameter, value), c.observations);

@@ -12,17 +12,10 @@ DepthRecording read_folder_recording(const std::string& folder, const RecordingO
   DepthRecording r;
   r.files = list_png_files(folder);
   if (r.files.empty()) throw InputError(fmt::format("{}: holds no PNG depth frame", folder));
-  if (options.intrinsics.empty()) {
-    const std::string file = find_intrinsics_json(folder);
-    if (file.empty())
-      throw InputError(fmt::format("{}: a folder of depth PNGs needs the camera's intrinsics: give --intrinsics "
-                                   "fx,fy,cx,cy (pixels) or --intrinsics FILE (JSON with width, height, "
-                                   "intrinsic_matrix)", folder));
-    r.intrinsics = read_intrinsics_json(file);
-    r.intrinsics_source = file;
-  } else {
-    r.intrinsics = parse_intrinsics_option(options.intrinsics, &r.intrinsics_source);
-  }
+  take_intrinsics(r, options, folder,
+                  fmt::format("{}: a folder of depth PNGs needs the camera's intrinsics: give --intrinsics "
+                              "fx,fy,cx,cy (pixels) or --intrinsics FILE (JSON with width, height, "
+                              "intrinsic_matrix)", folder));
   r.depth_scale = depth_scale_option(options, 0.001);
   r.timestamps = timestamps_from_numbered_files(options, r.files, "a folder of depth PNGs");
   select_frames(options, &r.files, &r.timestamps, folder);

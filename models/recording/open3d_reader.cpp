@@ -21,17 +21,10 @@ DepthRecording read_open3d_recording(const std::string& folder, const RecordingO
     throw InputError(fmt::format("{}: an Open3D recording keeps its depth frames in depth/, which is missing", folder));
   r.files = list_png_files(depth_folder);
   if (r.files.empty()) throw InputError(fmt::format("{}: holds no PNG depth frame", depth_folder));
-  if (!options.intrinsics.empty()) {
-    r.intrinsics = parse_intrinsics_option(options.intrinsics, &r.intrinsics_source);
-  } else {
-    const std::string file = find_intrinsics_json(folder);
-    if (file.empty())
-      throw InputError(fmt::format("{}: intrinsic.json is missing: an Open3D recording stores the depth camera's "
-                                   "intrinsics there; copy it from the recorder's output or give --intrinsics "
-                                   "fx,fy,cx,cy", folder));
-    r.intrinsics = read_intrinsics_json(file);
-    r.intrinsics_source = file;
-  }
+  take_intrinsics(r, options, folder,
+                  fmt::format("{}: intrinsic.json is missing: an Open3D recording stores the depth camera's "
+                              "intrinsics there; copy it from the recorder's output or give --intrinsics "
+                              "fx,fy,cx,cy", folder));
   r.depth_scale = depth_scale_option(options, 0.001);
   r.timestamps = timestamps_from_numbered_files(options, r.files, "an Open3D recording");
   select_frames(options, &r.files, &r.timestamps, depth_folder);

@@ -56,6 +56,18 @@ std::string find_intrinsics_json(const std::string& folder) {
   return "";
 }
 
+void take_intrinsics(DepthRecording& r, const RecordingOptions& options, const std::string& folder,
+                     const std::string& missing) {
+  if (!options.intrinsics.empty()) {
+    r.intrinsics = parse_intrinsics_option(options.intrinsics, &r.intrinsics_source);
+    return;
+  }
+  const std::string file = find_intrinsics_json(folder);
+  if (file.empty()) throw InputError(missing);
+  r.intrinsics = read_intrinsics_json(file);
+  r.intrinsics_source = file;
+}
+
 std::vector<std::string> list_png_files(const std::string& folder) {
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(folder))

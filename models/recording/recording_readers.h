@@ -20,6 +20,10 @@ DepthIntrinsics read_intrinsics_json(const std::string& file);
 
 // intrinsic.json or camera_intrinsic.json in `folder` (Open3D's names), or "".
 std::string find_intrinsics_json(const std::string& folder);
+// The recording's intrinsics: --intrinsics where given, else the folder's intrinsics JSON;
+// with neither, InputError(`missing`). Sets r.intrinsics and r.intrinsics_source.
+void take_intrinsics(DepthRecording& r, const RecordingOptions& options, const std::string& folder,
+                     const std::string& missing);
 
 // Timestamps f / fps for files numbered in their names (the last digit run): a missing number
 // is a dropped frame, a gap in the times (warning dropped_frames); names without digits are
