@@ -22,7 +22,7 @@ set(SSC_TESTS_unit
   ReconstructionStarts LevenbergMarquardt ParameterBounds
   ExtensionTable PlausibleRanges RunRecord WriteErrors MeasurementCorrection SvgPlot
   Layering OutputFolder ParameterNames ParameterTable Pcg ReportHtml SceneFiles Units
-  NvrtcCache NvrtcCompile
+  NvrtcCache NvrtcCompile ByteRecord BatchWorkers ComputeDevice
   RecordingReaders FrameTiming PlaneFit WorldFrame ScanRegistration MotionEstimate Segmentation ObjectSelection
   GpuForward.ReportsMissingGpuCleanly GpuKernels.GroupsCoverThePlanOnce)
 
@@ -35,7 +35,7 @@ set(SSC_TESTS_physics
   GpuForward.ExplodingGradientFailsCleanlyOnTheCpu GpuKernels.RandomStateAndEveryAdjointGroupOnTheCpu)
 
 set(SSC_TESTS_cli
-  CliSimulate DiagnoseCli ExtensionFit FrictionFit GoodnessOfFitCli Render CalculixDropsFit PrepareCli
+  CliSimulate DiagnoseCli ExtensionFit FrictionFit GoodnessOfFitCli Render CalculixDropsFit PrepareCli MpiRanks
   ReportHtml.ChromiumDrawsThePage)
 
 set(SSC_TESTS_slow
@@ -45,7 +45,7 @@ set(SSC_TESTS_slow
   ExtensionFit.NeoHookeanYoungsModulusFromASmallerTimeStep ExtensionFit.SecondPlaneFromAFinerSimulation
   FrictionFit.ReconstructRecoversMuFromAFinerSimulation
   NeoHookean.LargeDeflectionCantileverAgainstCalculix
-  PrepareCli.PrepareThenReconstructRecoversYoungsModulus
+  PrepareCli.PrepareThenReconstructRecoversYoungsModulus MpiRanks.ReconstructOnTwoRanksGivesTheOneProcessResult
   NvrtcCompile.AllExampleKernelsDoubleAndFloat)
 
 set(SSC_TESTS_gpu

@@ -25,18 +25,26 @@ std::string gpu_unavailable_reason() {
   return "";
 }
 
-std::string gpu_description() {
+std::string gpu_description(int ordinal) {
   std::string why;
   const cu::Driver* d = cu::driver(&why);
   if (!d) return "no usable GPU: " + why;
   cu::Device dev;
   char name[256] = {};
   int major = 0, minor = 0;
-  if (d->DeviceGet(&dev, 0) != 0) return "no usable GPU: cuDeviceGet failed";
+  if (d->DeviceGet(&dev, ordinal) != 0) return fmt::format("no usable GPU: cuDeviceGet({}) failed", ordinal);
   d->DeviceGetName(name, sizeof name, dev);
   d->DeviceGetAttribute(&major, cu::kAttrComputeCapabilityMajor, dev);
   d->DeviceGetAttribute(&minor, cu::kAttrComputeCapabilityMinor, dev);
   return fmt::format("{} (sm_{}{})", name, major, minor);
+}
+
+int gpu_count() {
+  std::string why;
+  const cu::Driver* d = cu::driver(&why);
+  int n = 0;
+  if (!d || d->DeviceGetCount(&n) != 0) return 0;
+  return n;
 }
 
 namespace {
@@ -206,7 +214,10 @@ void GpuTimestep::Impl::setup() {
   d = cu::driver(&why);
   if (!d) throw GpuUnavailable("no usable GPU: " + why);
   if (!nvrtc_available()) throw GpuUnavailable("no usable GPU: ssc was built without NVRTC");
-  cu::check(d->DeviceGet(&device, 0), "cuDeviceGet");
+  if (options.ordinal < 0 || options.ordinal >= gpu_count())
+    throw GpuUnavailable(fmt::format("no usable GPU: there is no GPU {} (the driver lists {})", options.ordinal,
+                                     gpu_count()));
+  cu::check(d->DeviceGet(&device, options.ordinal), "cuDeviceGet");
   cu::check(d->DevicePrimaryCtxRetain(&ctx, device), "cuDevicePrimaryCtxRetain");
   cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
   if (options.arch.empty()) {

@@ -43,11 +43,15 @@ class GpuUnavailable : public std::runtime_error {
 
 // Empty when a GPU can run kernels, else "no usable GPU: <reason>".
 std::string gpu_unavailable_reason();
-// "NVIDIA H100 80GB HBM3 (sm_90)", or the reason there is none.
-std::string gpu_description();
+// "NVIDIA H100 80GB HBM3 (sm_90)" for GPU `ordinal` (as the driver counts those
+// CUDA_VISIBLE_DEVICES leaves), or the reason there is none.
+std::string gpu_description(int ordinal = 0);
+// The GPUs the driver lists (0 where there is no usable GPU).
+int gpu_count();
 
 struct GpuOptions {
   std::string real = "double";  // "double" or "float"
+  int ordinal = 0;              // which GPU (the driver's numbering, after CUDA_VISIBLE_DEVICES)
   std::string arch;             // empty: the device's sm_XY
   bool fmad = false;            // --fmad (false: comparable with the interpreter)
   int check_every = 8;          // CG iterations between host checks of the solver state

@@ -54,9 +54,12 @@ class CliTestFolder : public ::testing::Test {
   // slow down many times over on cores shared with other processes (a reconstruction measured
   // 9 s on 2 idle cores, 15 s on one thread, up to 65 s on 2 threads at load 5).
   int run(const std::string& args, std::string* out, std::string* err) {
+    return run_with_prefix("OMP_NUM_THREADS=\"${OMP_NUM_THREADS:-1}\"", args, out, err);
+  }
+  // The same with `prefix` (environment settings, a launcher) before the binary.
+  int run_with_prefix(const std::string& prefix, const std::string& args, std::string* out, std::string* err) {
     const std::filesystem::path o = dir_ / "stdout.txt", e = dir_ / "stderr.txt";
-    const std::string cmd = "OMP_NUM_THREADS=\"${OMP_NUM_THREADS:-1}\" '" + binary_ + "' " + args + " > '" + o.string() +
-                            "' 2> '" + e.string() + "'";
+    const std::string cmd = prefix + " '" + binary_ + "' " + args + " > '" + o.string() + "' 2> '" + e.string() + "'";
     const int status = std::system(cmd.c_str());
     *out = read_text(o);
     *err = read_text(e);

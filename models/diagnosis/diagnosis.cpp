@@ -4,17 +4,22 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <mutex>
 #include <set>
+#include <thread>
 
 #include "models/diagnosis/candidates.h"
 #include "models/diagnosis/held_out.h"
 #include "models/diagnosis/measurement_fit.h"
 #include "models/diagnosis/model_fit.h"
 #include "models/diagnosis/score_test.h"
+#include "models/sim/compute_device.h"
 #include "models/sim/parameters.h"
 #include "runtime/errors.h"
+#include "runtime/ranks.h"
 
 namespace ssc {
 namespace {
@@ -128,6 +133,56 @@ FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const Diagnosis
   fits[best].proposal = specs[best].note;
   if (fits.size() > 1) fits[best].proposal += fmt::format(" (the best of {} proposals, fitted as one batch)", fits.size());
   return std::move(fits[best]);
+}
+
+// Step 3 for every candidate the shared batch did not fit, in `order`. With several GPUs (and
+// one rank) the fits run side by side, one per GPU, each taking the next candidate; a fit's
+// result does not depend on which GPU ran it. A skipped candidate's reason goes to `skipped`.
+std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const DiagnosisContext& c, const Scene& scene,
+                                               const std::vector<std::string>& order,
+                                               const std::map<std::string, FittedModel>& shared_fits,
+                                               std::vector<std::map<std::string, double>>& base_starts,
+                                               std::map<std::string, std::string>& skipped,
+                                               const std::function<void(const std::string&)>& say) {
+  std::vector<std::string> names;
+  for (const std::string& name : order)
+    if (!shared_fits.count(name) && !skipped.count(name)) names.push_back(name);
+  std::vector<FittedModel> fits(names.size());
+  std::vector<std::string> why(names.size());
+  std::mutex saying;
+  auto fit = [&](size_t k, const DiagnosisContext& on) {
+    {
+      std::lock_guard<std::mutex> lock(saying);
+      say("fitting " + names[k] + (on.options.device == c.options.device ? "" : " on " + on.options.device));
+    }
+    try {
+      fits[k] = fit_own(*find_extension(names[k]), d, on, scene, shared_fits, base_starts, &why[k]);
+    } catch (const std::exception& e) {
+      fits[k].failed = true;
+      fits[k].failure = e.what();
+    }
+  };
+  std::vector<int> gpus;
+  if (runs_on_gpu(c.options.device) && ranks::count() == 1) gpus = device_gpus(c.options.device);
+  if (gpus.size() <= 1 || names.size() <= 1) {
+    for (size_t k = 0; k < names.size(); ++k) fit(k, c);
+  } else {
+    std::atomic<size_t> next{0};
+    std::vector<std::thread> workers;
+    for (int g : gpus)
+      workers.emplace_back([&, g] {
+        DiagnosisContext on = c;
+        on.options.device = gpu_device(g);
+        for (size_t k = next++; k < names.size(); k = next++) fit(k, on);
+      });
+    for (std::thread& w : workers) w.join();
+  }
+  std::map<std::string, FittedModel> out;
+  for (size_t k = 0; k < names.size(); ++k) {
+    if (!why[k].empty()) skipped[names[k]] = why[k];
+    out[names[k]] = std::move(fits[k]);
+  }
+  return out;
 }
 
 // The fit's parameters at an end of their plausible range.
@@ -419,27 +474,15 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
     return sa > sb;
   });
 
+  std::map<std::string, FittedModel> own_fits = fit_own_all(d, c, scene, order, shared_fits, base_starts, skipped, say);
   for (const std::string& name : order) {
-    const ExtensionRow& row = *find_extension(name);
     CandidateVerdict v;
     v.name = name;
     if (score.count(name)) v.score = score.at(name);
     FittedModel m;
+    if (const auto f = shared_fits.find(name); f != shared_fits.end()) m = f->second;
+    if (const auto f = own_fits.find(name); f != own_fits.end()) m = std::move(f->second);
     m.name = name;
-    if (const auto f = shared_fits.find(name); f != shared_fits.end()) {
-      m = f->second;
-    } else if (!skipped.count(name)) {
-      say("fitting " + name);
-      std::string why;
-      try {
-        m = fit_own(row, d, c, scene, shared_fits, base_starts, &why);
-        if (!why.empty()) skipped[name] = why;
-      } catch (const std::exception& e) {
-        m.failed = true;
-        m.failure = e.what();
-      }
-      m.name = name;
-    }
     if (skipped.count(name)) {
       m.failed = true;
       m.failure = skipped.at(name);

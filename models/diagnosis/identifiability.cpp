@@ -7,6 +7,7 @@
 
 #include "models/cost/surface_constraint.h"
 #include "models/optim/surface_residuals.h"
+#include "models/sim/compute_device.h"
 #include "models/sim/parameters.h"
 #include "runtime/errors.h"
 
@@ -19,7 +20,7 @@ ParameterCorrelation parameter_correlation(const Problem& problem, const Physica
   const int n = int(names.size());
   if (n == 0 || steps.size() != names.size()) throw InputError("parameter_correlation: one step per parameter");
   Simulation sim(problem.scene, problem.grid, n + 1, true);
-  if (device == "cuda") sim.use_gpu();
+  place_on(sim, device);
   sim.set_parameters(0, at);
   for (int j = 0; j < n; ++j) {
     PhysicalParameters p = at;

@@ -10,6 +10,7 @@
 #include <limits>
 
 #include "models/cost/surface_constraint.h"
+#include "models/sim/compute_device.h"
 #include "models/sim/observation_setup.h"
 #include "models/sim/parameters.h"
 #include "models/sim/simulation.h"
@@ -41,7 +42,7 @@ MotionTrack track_motion(const Problem& p, const PhysicalParameters& params, con
   Scene scene = p.scene;
   scene.time.steps = std::max(scene.time.steps, last_step);
   Simulation sim(scene, g, 1, true);
-  if (device == "cuda") sim.use_gpu();
+  place_on(sim, device);
   sim.set_parameters(0, params);
   MotionTrack t;
   t.u.resize(keep.size());

@@ -10,6 +10,7 @@
 
 #include "models/cost/surface_constraint.h"
 #include "models/optim/reconstruction.h"
+#include "models/sim/compute_device.h"
 #include "models/sim/extensions.h"
 #include "models/sim/parameters.h"
 
@@ -79,7 +80,7 @@ std::map<std::string, double> values_by_name(const FittedModel& m) {
 
 std::vector<double> per_frame_costs(const Problem& problem, const PhysicalParameters& p, const std::string& device) {
   Simulation sim(problem.scene, problem.grid, 1, true);
-  if (device == "cuda") sim.use_gpu();
+  place_on(sim, device);
   sim.set_parameters(0, p);
   const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
   GradientOptions o;

@@ -8,6 +8,7 @@
 #include <map>
 
 #include "models/cost/surface_constraint.h"
+#include "models/sim/compute_device.h"
 #include "models/sim/simulation.h"
 
 namespace ssc {
@@ -62,7 +63,7 @@ std::string phase_name(const FrameResiduals& f) {
 Residuals compute_residuals(const Problem& problem, const PhysicalParameters& params, const std::string& device) {
   Residuals r;
   Simulation sim(problem.scene, problem.grid, 1, true);
-  if (device == "cuda") sim.use_gpu();
+  place_on(sim, device);
   sim.set_parameters(0, params);
   r.rest_centre = sim.center_of_mass(0);
   const SurfaceConstraintCost cost(problem.grid, problem.phi_max);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "models/cost/surface_constraint.h"
+#include "models/sim/compute_device.h"
 #include "models/sim/extensions.h"
 #include "models/sim/parameters.h"
 
@@ -29,7 +30,7 @@ std::map<std::string, double> score_test(const FittedModel& base, const Diagnosi
     for (const std::string& name : own[row]) set_parameter(params, name, row->off_value);
   }
   Simulation sim(p.scene, p.grid, 1, true);
-  if (c.options.device == "cuda") sim.use_gpu();
+  place_on(sim, c.options.device);
   sim.set_parameters(0, params);
   const SurfaceConstraintCost cost(p.grid, p.phi_max);
   const CostGradient r = evaluate_cost_gradient(sim, cost, p.frames, {})[0];

@@ -21,6 +21,7 @@
 #include <chrono>
 
 #include "runtime/errors.h"
+#include "runtime/ranks.h"
 #include "models/io/run_record.h"
 #include "models/io/text_file.h"
 #include "models/io/write_error.h"
@@ -201,6 +202,18 @@ OutputDir::OutputDir(const std::string& target, const std::vector<std::string>& 
   if (!given.has_filename() && given != given.root_path()) given = given.parent_path();
   const fs::path t = absolute_normal(target);
   check_target(target, given, t, protected_inputs);
+  if (ranks::rank() > 0) {  // rank 0 writes the output; another rank's copy goes to scratch and away
+    const fs::path scratch = fs::temp_directory_path(ec);
+    if (ec)
+      throw InputError(fmt::format("no temporary folder for this rank's scratch copy of the output ({}); set TMPDIR "
+                                   "to a writable folder", ec.message()));
+    temp_ = (scratch / fmt::format("ssc-rank-{}-{}", ranks::rank(), long(::getpid()))).string();
+    register_unfinished(temp_);
+    fs::remove_all(temp_, ec);
+    fs::create_directories(temp_, ec);
+    if (ec) throw InputError(fmt::format("rank {}: cannot create the scratch folder {}: {}", ranks::rank(), temp_, ec.message()));
+    return;
+  }
   fs::create_directories(t.parent_path(), ec);
   if (ec) throw InputError(fmt::format("--out {}: cannot create the parent folder: {}", target, ec.message()));
 
@@ -282,6 +295,10 @@ void OutputDir::write_manifest(const std::string& status) const {
 
 void OutputDir::commit() {
   write_manifest("complete");
+  if (ranks::rank() > 0) {
+    release();  // not committed: the scratch copy goes
+    return;
+  }
   const fs::path target(target_), temp(temp_);
   // What is there now may have changed since the run began (a user's file copied in).
   if (const std::string why = why_not_replaceable(target); !why.empty()) refuse(target_, why);

@@ -21,6 +21,9 @@
 // .NAME.ssc-del-PID, so that the writer's next file fails instead of landing in it, and is
 // then removed; no OutputDir finishes afterwards. Subfolders are made with make_folder (one
 // level at a time), which cannot bring back a folder that was moved away.
+// Ranks: in an MPI run (runtime/ranks.h) rank 0 alone writes the output; every other rank
+// checks the target as rank 0 does, writes into a scratch folder of its own in the system's
+// temporary folder, and commit() removes that.
 #pragma once
 #include <nlohmann/json.hpp>
 #include <string>

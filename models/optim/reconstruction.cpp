@@ -10,6 +10,7 @@
 #include <random>
 
 #include "runtime/errors.h"
+#include "models/optim/batch_evaluation.h"
 #include "models/optim/levenberg_marquardt.h"
 #include "models/optim/surface_residuals.h"
 #include "models/sim/parameters.h"
@@ -21,33 +22,6 @@ PhysicalParameters with_values(PhysicalParameters p, const std::vector<std::stri
   for (size_t i = 0; i < names.size(); ++i) set_parameter(p, names[i], x[i]);
   return p;
 }
-
-// The batched simulation of the last round, kept while the number of active starts stays
-// the same, so that a GPU's modules, buffers and captured graphs are set up once. On a GPU,
-// where a step of a small batch costs what it costs for one, a batch whose starts finish
-// is kept and its free places run copies of an active start.
-class BatchSimulations {
- public:
-  BatchSimulations(const Problem& problem, const std::string& device) : problem_(problem), gpu_(device == "cuda") {}
-  Simulation& batch(int n) {
-    if (!batch_ || batch_->batch() < n || (batch_->batch() != n && !gpu_)) {
-      batch_.reset();
-      batch_ = make(n);
-    }
-    return *batch_;
-  }
-  void forget() { batch_.reset(); }  // after a failure: no half-run state carries over
-  std::unique_ptr<Simulation> make(int n) const {
-    auto sim = std::make_unique<Simulation>(problem_.scene, problem_.grid, n, true);
-    if (gpu_) sim->use_gpu();
-    return sim;
-  }
-
- private:
-  const Problem& problem_;
-  bool gpu_;
-  std::unique_ptr<Simulation> batch_;
-};
 
 // The coordinates one start's optimiser moves in: the parameters it fits (all, unless
 // ReconstructionOptions::start_free says otherwise), the rest held at their initial values.
@@ -82,83 +56,6 @@ class StartSpace {
   ParameterSpace space_;
   Eigen::VectorXd held_;
 };
-
-// Evaluates the starts at `points` as one batch. A simulation failure that names its batch
-// items (SimulationError::items) drops those starts and runs the others again as one batch;
-// one that does not, one start at a time, so that only the failing starts are dropped.
-// Returns false for a failed start. With `residuals`, also each point's residual vector
-// (forward simulations only: `gradient` is then ignored).
-std::vector<bool> evaluate_batch(BatchSimulations& sims, const Problem& problem, const SurfaceConstraintCost& cost,
-                                 const PhysicalParameters& base,
-                                 const std::vector<std::string>& names, const std::vector<Eigen::VectorXd>& points,
-                                 std::vector<CostGradient>* results, std::vector<std::string>* failures,
-                                 bool gradient = true, const SurfaceResiduals* residuals = nullptr,
-                                 std::vector<ResidualVector>* residual_values = nullptr,
-                                 const std::function<void(int, int)>& on_step = {}) {
-  GradientOptions options;
-  options.gradient = gradient && !residuals;
-  options.on_step = on_step;
-  const int n = int(points.size());
-  std::vector<bool> ok(n, true);
-  results->assign(n, CostGradient{});
-  failures->assign(n, "");
-  if (residuals) residual_values->assign(n, ResidualVector{});
-  // One result per batch item; item i is points[pending[i]] (the first beyond `pending`).
-  auto run = [&](Simulation& sim, const std::vector<int>& pending) {
-    if (!residuals) return evaluate_cost_gradient(sim, cost, problem.frames, options);
-    std::vector<ResidualVector> r(size_t(sim.batch()));
-    for (ResidualVector& v : r) v.r.resize(residuals->size()), v.matched.resize(size_t(residuals->size()));
-    std::vector<int> steps;
-    for (const ObservedFrame& f : problem.frames) steps.push_back(f.step);
-    const std::vector<CostGradient> c = evaluate_trajectory_gradient(
-        sim, steps,
-        [&](size_t f, int item, const double* u, const double* band, double*, double*) {
-          return residuals->frame(f, u, band, &r[size_t(item)]);
-        },
-        options);
-    for (size_t i = 0; i < pending.size(); ++i) (*residual_values)[size_t(pending[i])] = std::move(r[i]);
-    return c;
-  };
-  std::vector<int> pending(n);
-  std::iota(pending.begin(), pending.end(), 0);
-  while (!pending.empty()) {
-    const int m = int(pending.size());
-    std::vector<int> named;
-    try {
-      Simulation& sim = sims.batch(m);
-      // Places beyond m (a larger batch kept on the GPU) run copies of the first start.
-      for (int i = 0; i < sim.batch(); ++i)
-        sim.set_parameters(i, with_values(base, names, points[size_t(pending[size_t(i < m ? i : 0)])]));
-      const std::vector<CostGradient> r = run(sim, pending);
-      for (int i = 0; i < m; ++i) (*results)[size_t(pending[size_t(i)])] = r[size_t(i)];
-      return ok;
-    } catch (const SimulationError& e) {
-      sims.forget();
-      for (int item : e.items) named.push_back(pending[size_t(item < m ? item : 0)]);
-      if (named.empty() && m == 1) named.push_back(pending[0]);
-      if (named.empty()) break;
-      for (int s : named) {
-        ok[size_t(s)] = false;
-        (*failures)[size_t(s)] = e.what();
-      }
-    }
-    std::vector<int> rest;
-    for (int s : pending)
-      if (ok[size_t(s)]) rest.push_back(s);
-    pending = rest;
-  }
-  for (int s : pending) {
-    try {
-      const std::unique_ptr<Simulation> sim = sims.make(1);
-      sim->set_parameters(0, with_values(base, names, points[size_t(s)]));
-      (*results)[size_t(s)] = run(*sim, {s})[0];
-    } catch (const SimulationError& e) {
-      ok[size_t(s)] = false;
-      (*failures)[size_t(s)] = e.what();
-    }
-  }
-  return ok;
-}
 
 }  // namespace
 
@@ -279,25 +176,24 @@ void fit_least_squares(const Problem& problem, const ReconstructionOptions& o, c
       first.push_back(points.size());
       for (const Eigen::VectorXd& z : lm[s].ask()) points.push_back(spaces[s].to_physical(z));
     }
-    std::vector<CostGradient> values;
-    std::vector<std::string> failures;
-    std::vector<ResidualVector> r;
-    const std::vector<bool> ok =
-        evaluate_batch(sims, problem, cost, base, result.names, points, &values, &failures, false, &residuals, &r,
-                       o.evaluation_progress);
+    std::vector<PointEvaluation> e =
+        evaluate_batch(sims, cost, base, result.names, points, false, &residuals, o.evaluation_progress);
     result.evaluations += int(points.size());
     for (size_t k = 0; k < active.size(); ++k) {
       const int s = active[k];
       const size_t n = size_t(spaces[s].space().size()) + 1, a = first[k];
       std::string failure;
-      for (size_t i = a; i < a + n && failure.empty(); ++i)
-        if (!ok[i]) failure = failures[i];
-      lm[s].tell(std::vector<ResidualVector>(r.begin() + long(a), r.begin() + long(a + n)), failure);
+      std::vector<ResidualVector> r;
+      for (size_t i = a; i < a + n; ++i) {
+        if (!e[i].ok && failure.empty()) failure = e[i].failure;
+        r.push_back(std::move(e[i].residuals));
+      }
+      lm[s].tell(r, failure);
       StartRecord& rec = result.starts[s];
       if (!lm[s].accepted()) continue;
       rec.cost_history.push_back(lm[s].best_cost());
       rec.parameter_history.push_back(points[a]);
-      rec.frames = values[a].frames;
+      rec.frames = e[a].value.frames;
       rec.matched_points = rec.observed_points = 0;
       for (const FrameCost& f : rec.frames) rec.matched_points += f.matched, rec.observed_points += f.points;
       rec.final_gradient_norm = lm[s].gradient_norm();
@@ -394,11 +290,8 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
       if (active.empty()) break;
       std::vector<Eigen::VectorXd> points;
       for (int s : active) points.push_back(spaces[s].to_physical(opt[s]->ask()));
-      std::vector<CostGradient> values;
-      std::vector<std::string> failures;
-      const std::vector<bool> ok =
-          evaluate_batch(sims, problem, cost, base, result.names, points, &values, &failures, !o.finite_differences,
-                         nullptr, nullptr, o.evaluation_progress);
+      const std::vector<PointEvaluation> e =
+          evaluate_batch(sims, cost, base, result.names, points, !o.finite_differences, nullptr, o.evaluation_progress);
       result.evaluations += int(active.size());
       // The comparison the paper makes: central differences in the optimiser's coordinates
       // instead of the adjoint, all 2 x parameters x starts probes as one batch.
@@ -413,43 +306,42 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
               z[i] += sign * o.fd_step;
               probes.push_back(spaces[s].to_physical(z));
             }
-        std::vector<CostGradient> probe_values;
-        std::vector<std::string> probe_failures;
-        const std::vector<bool> probe_ok =
-            evaluate_batch(sims, problem, cost, base, result.names, probes, &probe_values, &probe_failures, false);
+        const std::vector<PointEvaluation> pe = evaluate_batch(sims, cost, base, result.names, probes, false);
         result.evaluations += int(probes.size());
         size_t a = 0;
         for (size_t k = 0; k < active.size(); ++k) {
           const int n = spaces[active[k]].space().size();
           fd_gradient[k].resize(n);
           for (int i = 0; i < n; ++i, a += 2) {
-            fd_gradient[k][i] = (probe_values[a].cost - probe_values[a + 1].cost) / (2 * o.fd_step);
-            if (!probe_ok[a] || !probe_ok[a + 1]) fd_failure[k] = "a finite-difference probe failed: " + probe_failures[probe_ok[a] ? a + 1 : a];
+            fd_gradient[k][i] = (pe[a].value.cost - pe[a + 1].value.cost) / (2 * o.fd_step);
+            if (!pe[a].ok || !pe[a + 1].ok)
+              fd_failure[k] = "a finite-difference probe failed: " + pe[pe[a].ok ? a + 1 : a].failure;
           }
         }
       }
       for (size_t k = 0; k < active.size(); ++k) {
         StartRecord& rec = result.starts[active[k]];
-        if (!ok[k] || !fd_failure[k].empty()) {
+        if (!e[k].ok || !fd_failure[k].empty()) {
           rec.failed = true;
-          rec.failure = ok[k] ? fd_failure[k] : failures[k];
+          rec.failure = e[k].ok ? fd_failure[k] : e[k].failure;
           continue;
         }
+        const CostGradient& value = e[k].value;
         Eigen::VectorXd g(space.size());
-        for (int i = 0; i < space.size(); ++i) g[i] = parameter_gradient(values[k].gradient, with_values(base, result.names, points[k]), result.names[i]);
+        for (int i = 0; i < space.size(); ++i) g[i] = parameter_gradient(value.gradient, with_values(base, result.names, points[k]), result.names[i]);
         const int before = opt[active[k]]->iterations();
         const Eigen::VectorXd internal_gradient =
             o.finite_differences ? fd_gradient[k] : spaces[active[k]].gradient_to_internal(opt[active[k]]->ask(), g);
         if (rec.initial_gradient_norm < 0) rec.initial_gradient_norm = internal_gradient.norm();
-        if (values[k].cost < opt[active[k]]->best_cost()) {
-          rec.frames = values[k].frames;
+        if (value.cost < opt[active[k]]->best_cost()) {
+          rec.frames = value.frames;
           rec.matched_points = rec.observed_points = 0;
           for (const FrameCost& f : rec.frames) rec.matched_points += f.matched, rec.observed_points += f.points;
           rec.final_gradient_norm = internal_gradient.norm();
         }
-        opt[active[k]]->tell(values[k].cost, internal_gradient);
+        opt[active[k]]->tell(value.cost, internal_gradient);
         if (opt[active[k]]->iterations() != before || rec.cost_history.empty()) {
-          rec.cost_history.push_back(values[k].cost);
+          rec.cost_history.push_back(value.cost);
           rec.parameter_history.push_back(points[k]);
         }
       }

@@ -55,7 +55,7 @@ struct ReconstructionOptions {
   std::vector<std::vector<int>> start_free;
   bool finite_differences = false;  // central differences instead of the adjoint (for comparison; not with lm)
   double fd_step = 1e-4;            // in the optimiser's internal coordinates (log space: 0.01 %); also lm's
-  std::string device = "cpu";       // "cuda": simulations and adjoints on the GPU (Simulation::use_gpu)
+  std::string device = "cpu";       // "cuda" or "cuda:K": on the GPUs (models/sim/compute_device.h)
   // Within a round: the steps done of the batch evaluation running and their total (forward,
   // and backward with the gradient), for progress on long rounds; may be empty.
   std::function<void(int done, int total)> evaluation_progress;

@@ -70,9 +70,10 @@ Simulation::Simulation(const Scene& scene, const SimGrid& grid, int batch, bool 
 
 Simulation::~Simulation() = default;
 
-void Simulation::use_gpu(const std::string& real) {
+void Simulation::use_gpu(const std::string& real, int ordinal) {
   GpuOptions options;
   options.real = real;
+  options.ordinal = ordinal;
   sync_host();
   backend_ = std::make_unique<GpuTimestep>(graph_.graph, grid_, batch(), interpreter_->options(), options);
   gpu_ = static_cast<GpuTimestep*>(backend_.get());

@@ -38,8 +38,8 @@ class Simulation {
 
   // Runs the steps with the generated CUDA kernels (runtime/cuda_runtime.h) instead of the
   // interpreter, forward and (models/sim/gradient.h) adjoint; throws GpuUnavailable without
-  // a usable GPU.
-  void use_gpu(const std::string& real = "double");
+  // a usable GPU. ordinal: which GPU (models/sim/compute_device.h).
+  void use_gpu(const std::string& real = "double", int ordinal = 0);
   bool on_gpu() const { return gpu_ != nullptr; }
   GpuTimestep* gpu() { return gpu_; }
   // Where the steps run (runtime/step_backend.h): the interpreter or the GPU.

@@ -195,7 +195,7 @@ def run_case(c, a):
         measurement_edit(obs, c["edit"])
     t0 = time.time()
     r = run([a.ssc, "diagnose", fit, "--observations", obs, "--out", os.path.join(d, "diag"),
-             "--starts", str(a.starts), "--iterations", str(a.iterations), "--device", a.device])
+             "--starts", str(a.starts), "--iterations", str(a.iterations), "--device", a.device] + a.diagnose_args.split())
     wall = time.time() - t0
     if r.returncode:
         print(f"{c['name']}: diagnose failed: {r.stderr.strip()[-300:]}", flush=True)
@@ -241,6 +241,7 @@ def main():
     ap.add_argument("--calculix", default="", help="a tools/calculix/drops.sh output folder: diagnose its cases "
                     "(rendered here with 1 mm noise) instead of the ssc-made ones")
     ap.add_argument("--jobs", type=int, default=1, help="diagnoses run at once (one GPU shares them)")
+    ap.add_argument("--diagnose-args", default="", help="more arguments for ssc diagnose (e.g. '--gpus 1')")
     a = ap.parse_args()
     os.makedirs(a.work, exist_ok=True)
     results = []

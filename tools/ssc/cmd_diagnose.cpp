@@ -19,6 +19,7 @@
 #include "models/io/output_dir.h"
 #include "models/io/run_record.h"
 #include "models/io/text_file.h"
+#include "models/sim/compute_device.h"
 #include "models/sim/parameters.h"
 #include "models/sim/problem.h"
 #include "runtime/cuda_runtime.h"
@@ -132,7 +133,7 @@ Command register_diagnose(CLI::App& app) {
   sub->add_option("--seed", o->d.seed, "Seed of the starts and the bootstrap");
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
-  add_device_option(sub, &o->device);
+  add_device_option(sub, &o->device, true);
   add_progress_options(sub, &o->progress);
   return [o] {
     DiagnosisOptions opt = o->d;
@@ -141,7 +142,7 @@ Command register_diagnose(CLI::App& app) {
     OutputDir out(o->out, {o->scene, o->observations});
     out.manifest()["scene"] = {{"file", o->scene}};
     out.manifest()["observations"] = folder_fingerprint(o->observations);
-    const std::string device = opt.device == "cuda" ? gpu_description() : "cpu";
+    const std::string device = describe_device(opt.device);
     out.manifest()["device"] = device;
     Progress progress("diagnose", 0, o->progress);
     const Diagnosis d = diagnose(o->scene, o->overrides, o->observations, o->phi_max, opt,

@@ -19,6 +19,7 @@
 #include "models/io/output_dir.h"
 #include "models/io/svg_plot.h"
 #include "models/optim/reconstruction.h"
+#include "models/sim/compute_device.h"
 #include "models/sim/extensions.h"
 #include "models/sim/parameters.h"
 #include "models/sim/problem.h"
@@ -194,7 +195,7 @@ Command register_reconstruct(CLI::App& app) {
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
   sub->add_option("--out", o->out, "Output folder (replaced atomically)")->required();
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
-  add_device_option(sub, &o->device);
+  add_device_option(sub, &o->device, true);
   add_progress_options(sub, &o->progress);
   return [o] {
     const std::string device = choose_device(o->device);
@@ -214,7 +215,7 @@ Command register_reconstruct(CLI::App& app) {
     OutputDir out(o->out, {o->scene, o->observations, problem.scene.object.path});
     out.manifest()["scene"] = {{"file", o->scene}, {"resolved", problem.scene.resolved}};
     out.manifest()["observations"] = folder_fingerprint(o->observations);
-    out.manifest()["device"] = device == "cuda" ? gpu_description() : "cpu";
+    out.manifest()["device"] = describe_device(device);
     Progress progress("reconstruct: round", o->iterations, o->progress, 0.0);
     // Within a round: a line every 2 s of a long evaluation, with the steps done and an
     // estimate of the evaluation's rest (a round of 1000 starts runs for tens of seconds).
@@ -276,7 +277,7 @@ Command register_reconstruct(CLI::App& app) {
     j["seed"] = ro.seed;
     j["evaluations"] = r.evaluations;
     j["wall_seconds"] = r.wall_seconds;
-    j["device"] = device == "cuda" ? gpu_description() : "cpu";
+    j["device"] = describe_device(device);
     nlohmann::json starts = nlohmann::json::array();
     std::string csv = "start,iteration,cost";
     for (const std::string& n : r.names) csv += "," + n;

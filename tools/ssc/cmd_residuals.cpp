@@ -16,6 +16,7 @@
 #include "models/io/output_dir.h"
 #include "models/io/svg_plot.h"
 #include "models/io/text_file.h"
+#include "models/sim/compute_device.h"
 #include "models/sim/problem.h"
 #include "runtime/errors.h"
 #include "runtime/cuda_runtime.h"
@@ -73,7 +74,7 @@ Command register_residuals(CLI::App& app) {
     out.manifest()["scene"] = {{"file", o->scene}, {"resolved", problem.scene.resolved}};
     out.manifest()["observations"] = folder_fingerprint(o->observations);
     if (!o->params.empty()) out.manifest()["params"] = {{"file", o->params}, {"set", fitted.set}};
-    out.manifest()["device"] = device == "cuda" ? gpu_description() : "cpu";
+    out.manifest()["device"] = describe_device(device);
     size_t points = 0;
     for (const ObservedFrame& f : problem.frames) points += f.points.size();
     progress.stage(fmt::format("simulating {} steps and measuring {} observed points of {} frames", problem.scene.time.steps,

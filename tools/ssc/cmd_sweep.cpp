@@ -6,17 +6,21 @@
 #include <fstream>
 
 #include "models/cost/baselines.h"
-#include "runtime/errors.h"
-#include "models/io/text_file.h"
+#include "models/io/byte_record.h"
+#include "models/io/folder_hash.h"
 #include "models/io/output_dir.h"
 #include "models/io/svg_plot.h"
+#include "models/io/text_file.h"
+#include "models/sim/batch_workers.h"
+#include "models/sim/compute_device.h"
+#include "models/sim/match_check.h"
 #include "models/sim/parameters.h"
 #include "models/sim/problem.h"
+#include "models/sim/simulation.h"
+#include "runtime/errors.h"
 #include "tools/ssc/commands.h"
 #include "tools/ssc/device_option.h"
 #include "tools/ssc/progress.h"
-#include "models/io/folder_hash.h"
-#include "models/sim/match_check.h"
 
 namespace ssc {
 namespace {
@@ -69,7 +73,7 @@ Command register_sweep(CLI::App& app) {
   sub->add_option("--param", o->param, "NAME=LO:HI:N")->required();
   sub->add_option("--out", o->out, "Output folder (sweep.csv, sweep.svg)")->required();
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
-  add_device_option(sub, &o->device);
+  add_device_option(sub, &o->device, true);
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
   sub->add_option("--truth", o->truth, "Value to mark in the plot (e.g. the ground truth)");
   sub->add_flag("--log", o->log, "Sample logarithmically");
@@ -84,10 +88,10 @@ Command register_sweep(CLI::App& app) {
     OutputDir out(o->out, {o->scene, o->observations, problem.scene.object.path});
     out.manifest()["scene"] = {{"file", o->scene}, {"resolved", problem.scene.resolved}};
     out.manifest()["observations"] = folder_fingerprint(o->observations);
-    Simulation sim(problem.scene, problem.grid, 1, true);
-    out.manifest()["device"] = place_simulation(sim, o->device);
+    const std::string device = choose_device(o->device);
+    out.manifest()["device"] = describe_device(device);
     const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
-    const PhysicalParameters base = sim.parameters(0);
+    const PhysicalParameters base = PhysicalParameters::from_scene(problem.scene);
     const std::vector<std::string> expanded = expand_parameter_names({range.name}, base);
     if (expanded.size() != 1)
       throw InputError(fmt::format("--param {}: '{}' is a vector; sweep one component at a time ({}, {} or {})", o->param,
@@ -110,25 +114,45 @@ Command register_sweep(CLI::App& app) {
       frame_cost = o->cost == "disp" ? displacement_cost(truth) : sdf_difference_cost(truth, cost);
     }
     std::vector<double> xs, costs, grads;
-    std::vector<FrameCost> best_matches;
-    int best_matched = -1;
-    Progress progress("sweep: sample", range.count, o->progress);
-    std::string csv = fmt::format("{},cost,gradient,matched_points,observed_points\n", range.name);
     for (int i = 0; i < range.count; ++i) {
       const double t = double(i) / (range.count - 1);
-      const double x = o->log ? range.lo * std::pow(range.hi / range.lo, t) : range.lo + t * (range.hi - range.lo);
-      PhysicalParameters p = base;
-      set_parameter(p, range.name, x);
-      sim.set_parameters(0, p);
-      const CostGradient r = evaluate_trajectory_gradient(sim, steps, frame_cost)[0];
+      xs.push_back(o->log ? range.lo * std::pow(range.hi / range.lo, t) : range.lo + t * (range.hi - range.lo));
+    }
+    Progress progress("sweep: sample", range.count, o->progress);
+    // The samples are shared among the GPUs and MPI ranks (models/sim/batch_workers.h), each
+    // worker running its own one after another.
+    const std::vector<std::string> samples = run_shared(range.count, device, [&](const BatchShare& share) {
+      Simulation sim(problem.scene, problem.grid, 1, true);
+      place_on(sim, share.device);
+      std::vector<std::string> done;
+      for (int i = share.begin; i < share.end; ++i) {
+        PhysicalParameters p = base;
+        set_parameter(p, range.name, xs[size_t(i)]);
+        sim.set_parameters(0, p);
+        const CostGradient r = evaluate_trajectory_gradient(sim, steps, frame_cost)[0];
+        ByteWriter w;
+        w.put(r.cost);
+        w.put(parameter_gradient(r.gradient, p, range.name));
+        w.put_vector(r.frames);
+        done.push_back(w.bytes());
+        if (share.reports)
+          progress.update(int(double(i + 1 - share.begin) * range.count / (share.end - share.begin)),
+                          fmt::format("{} = {:.4g}", range.name, xs[size_t(i)]));
+      }
+      return done;
+    });
+    std::vector<FrameCost> best_matches;
+    int best_matched = -1;
+    std::string csv = fmt::format("{},cost,gradient,matched_points,observed_points\n", range.name);
+    for (int i = 0; i < range.count; ++i) {
+      ByteReader r(samples[size_t(i)]);
+      costs.push_back(r.get<double>());
+      grads.push_back(r.get<double>());
+      const std::vector<FrameCost> frames = r.get_vector<FrameCost>();
       int points = 0, matched = 0;
-      for (const FrameCost& f : r.frames) points += f.points, matched += f.matched;
-      if (matched > best_matched) best_matched = matched, best_matches = r.frames;
-      xs.push_back(x);
-      costs.push_back(r.cost);
-      grads.push_back(parameter_gradient(r.gradient, p, range.name));
-      csv += fmt::format("{:.10g},{:.10g},{:.10g},{},{}\n", x, r.cost, grads.back(), matched, points);
-      progress.update(i + 1, fmt::format("{} = {:.4g}", range.name, x));
+      for (const FrameCost& f : frames) points += f.points, matched += f.matched;
+      if (matched > best_matched) best_matched = matched, best_matches = frames;
+      csv += fmt::format("{:.10g},{:.10g},{:.10g},{},{}\n", xs[size_t(i)], costs.back(), grads.back(), matched, points);
     }
     progress.finish();
     if (o->cost == "ssc") check_matches(best_matches, o->observations, "the sweep's best-matching sample");

@@ -1,12 +1,17 @@
 // ssc command-line entry point: dispatches to the subcommands and turns every error into
 // one clear message and its exit code (runtime/errors.h, docs/cli.md).
+#include <fcntl.h>
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 
 #include "runtime/errors.h"
+#include "runtime/ranks.h"
+#include "models/sim/batch_workers.h"
 #include "models/io/notes.h"
 #include "models/io/run_record.h"
 #include "models/io/write_error.h"
@@ -17,15 +22,14 @@
 
 namespace {
 
-// Runs the parsed command; an error becomes its message ("ssc: KIND: ...") and exit code.
-int run_command(const std::vector<std::pair<CLI::App*, ssc::Command>>& commands, std::string* error) {
+// A failed command's message ("ssc: KIND: ...") and exit code.
+int describe_failure(const std::exception_ptr& failure, std::string* error) {
   auto fail = [error](const char* kind, const std::string& what, int code) {
     *error = fmt::format("ssc: {}: {}", kind, what);
     return code;
   };
   try {
-    for (auto& [sub, run] : commands)
-      if (sub->parsed()) return run();
+    std::rethrow_exception(failure);
   } catch (const ssc::InputError& e) {
     return fail("error", e.what(), ssc::kExitInput);
   } catch (const ssc::SimulationError& e) {
@@ -42,13 +46,27 @@ int run_command(const std::vector<std::pair<CLI::App*, ssc::Command>>& commands,
     return fail("error", "out of memory; use a coarser grid, fewer starts or a shorter run", ssc::kExitInput);
   } catch (const std::exception& e) {
     return fail("internal error (please report it)", e.what(), ssc::kExitInternal);
+  } catch (...) {
+    return fail("internal error (please report it)", "an unknown exception", ssc::kExitInternal);
   }
-  return ssc::kExitUsage;
 }
 
-}  // namespace
+// Under MPI every rank but 0 runs silently, its stdout and stderr going to /dev/null: rank 0
+// prints the progress, the result and any rank's error (ssc::agree_on_outcome).
+void quiet_other_ranks() {
+  if (ssc::ranks::rank() == 0) return;
+  const int null = ::open("/dev/null", O_WRONLY);
+  if (null >= 0) {
+    std::fflush(stdout);
+    std::fflush(stderr);
+    ::dup2(null, 1);
+    ::dup2(null, 2);
+    ::close(null);
+  }
+}
 
-int main(int argc, char** argv) {
+// Parses and runs the command: its exit code, or the exception that ended it in *failure.
+int run_main(int argc, char** argv, std::exception_ptr* failure) {
   ssc::handle_interrupts();
   ssc::set_command_line(argc, argv);
   CLI::App app{fmt::format("ssc {}: physical parameters from sparse surface constraints", SSC_VERSION)};
@@ -98,9 +116,35 @@ int main(int argc, char** argv) {
     return ssc::kExitUsage;
   }
   ssc::hold_warnings();  // printed together at the end, after any progress line
-  std::string error;
-  const int code = run_command(commands, &error);
+  try {
+    for (auto& [sub, run] : commands)
+      if (sub->parsed()) return run();
+  } catch (...) {
+    *failure = std::current_exception();
+    return ssc::kExitInternal;
+  }
+  return ssc::kExitUsage;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    ssc::ranks::start(&argc, &argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "ssc: error: %s\n", e.what());
+    return ssc::kExitInput;
+  }
+  quiet_other_ranks();
+  std::exception_ptr failure;
+  int code = run_main(argc, argv, &failure);
+  failure = ssc::agree_on_outcome(failure);  // several ranks: a failure on one ends them all
   if (!ssc::quiet()) ssc::print_held_warnings();
-  if (!error.empty()) std::fprintf(stderr, "%s\n", error.c_str());
+  if (failure) {
+    std::string error;
+    code = describe_failure(failure, &error);
+    std::fprintf(stderr, "%s\n", error.c_str());
+  }
+  ssc::ranks::finish();
   return code;
 }

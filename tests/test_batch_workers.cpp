@@ -1,0 +1,142 @@
+// Sharing a batch among workers (models/sim/batch_workers.h), the device names
+// (models/sim/compute_device.h) and the records the ranks send each other
+// (models/io/byte_record.h, models/optim/batch_evaluation.h), on one process.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+#include "models/io/byte_record.h"
+#include "models/optim/batch_evaluation.h"
+#include "models/sim/batch_workers.h"
+#include "models/sim/compute_device.h"
+#include "runtime/errors.h"
+
+namespace ssc {
+namespace {
+
+TEST(ByteRecord, ValuesStringsAndVectorsComeBackAsWritten) {
+  ByteWriter w;
+  w.put(3.25);
+  w.put_string("a\0b");
+  w.put_string(std::string("x\0y", 3));
+  w.put_vector(std::vector<int>{4, -5, 6});
+  w.put('z');
+  ByteReader r(w.bytes());
+  EXPECT_EQ(r.get<double>(), 3.25);
+  EXPECT_EQ(r.get_string(), "a");
+  EXPECT_EQ(r.get_string(), std::string("x\0y", 3));
+  EXPECT_EQ(r.get_vector<int>(), (std::vector<int>{4, -5, 6}));
+  EXPECT_EQ(r.get<char>(), 'z');
+  EXPECT_TRUE(r.at_end());
+  EXPECT_THROW(r.get<int>(), std::runtime_error);
+  const std::string cut = w.bytes().substr(0, 12);
+  ByteReader short_reader(cut);
+  short_reader.get<double>();
+  EXPECT_THROW(short_reader.get_string(), std::runtime_error);
+}
+
+TEST(BatchWorkers, PointEvaluationsComeBackBitForBit) {
+  PointEvaluation e;
+  e.ok = false;
+  e.failure = "the Newmark solve did not converge";
+  e.value.cost = 0.1 + 1e-17;
+  e.value.frames = {{1.5, 10, 7}, {2.5, 12, 11}};
+  e.value.gradient.youngs_modulus = -3.0e-9;
+  e.value.gradient.gravity = Eigen::Vector3d(1, 2, 3);
+  e.value.gradient.angular_velocity = Eigen::Vector3d(-1, 0.5, 1e-300);
+  e.value.gradient.plane_normal = {Eigen::Vector3d(0, 0, 1)};
+  e.value.gradient.plane_height = {0.25, -0.5};
+  e.value.gradient.input["friction_mu"] = {0.125};
+  e.value.gradient.input["drag"] = {1, 2};
+  e.residuals.r = Eigen::VectorXd::LinSpaced(5, -1, 1);
+  e.residuals.matched = {1, 0, 1, 1, 0};
+  const PointEvaluation d = decode_point(encode_point(e));
+  EXPECT_EQ(d.ok, e.ok);
+  EXPECT_EQ(d.failure, e.failure);
+  EXPECT_EQ(d.value.cost, e.value.cost);
+  ASSERT_EQ(d.value.frames.size(), 2u);
+  EXPECT_EQ(d.value.frames[1].cost, 2.5);
+  EXPECT_EQ(d.value.frames[1].matched, 11);
+  EXPECT_EQ(d.value.gradient.youngs_modulus, e.value.gradient.youngs_modulus);
+  EXPECT_EQ(d.value.gradient.gravity, e.value.gradient.gravity);
+  EXPECT_EQ(d.value.gradient.angular_velocity, e.value.gradient.angular_velocity);
+  EXPECT_EQ(d.value.gradient.plane_normal, e.value.gradient.plane_normal);
+  EXPECT_EQ(d.value.gradient.plane_height, e.value.gradient.plane_height);
+  EXPECT_EQ(d.value.gradient.input, e.value.gradient.input);
+  EXPECT_EQ(d.residuals.r, e.residuals.r);
+  EXPECT_EQ(d.residuals.matched, e.residuals.matched);
+  EXPECT_THROW(decode_point(encode_point(e) + "x"), std::runtime_error);
+}
+
+TEST(BatchWorkers, OneProcessOnTheCpuIsOneWorkerWithEveryItem) {
+  const std::vector<BatchShare> shares = this_rank_shares(7, "cpu");
+  ASSERT_EQ(shares.size(), 1u);
+  EXPECT_EQ(shares[0].begin, 0);
+  EXPECT_EQ(shares[0].end, 7);
+  EXPECT_EQ(shares[0].device, "cpu");
+  EXPECT_TRUE(shares[0].reports);
+  // A named GPU is one worker too (whether or not this machine has it: nothing is started).
+  const std::vector<BatchShare> one_gpu = this_rank_shares(5, "cuda:3");
+  ASSERT_EQ(one_gpu.size(), 1u);
+  EXPECT_EQ(one_gpu[0].device, "cuda:3");
+  EXPECT_EQ(one_gpu[0].end, 5);
+}
+
+TEST(BatchWorkers, RunSharedKeepsItemOrderAndRethrowsWithBatchIndices) {
+  const std::vector<std::string> out = run_shared(4, "cpu", [](const BatchShare& s) {
+    std::vector<std::string> r;
+    for (int i = s.begin; i < s.end; ++i) r.push_back(std::to_string(i * i));
+    return r;
+  });
+  EXPECT_EQ(out, (std::vector<std::string>{"0", "1", "4", "9"}));
+  EXPECT_THROW(run_shared(2, "cpu", [](const BatchShare&) { return std::vector<std::string>{"one"}; }),
+               std::logic_error);
+  EXPECT_THROW(run_shared(2, "cpu", [](const BatchShare&) -> std::vector<std::string> { throw InputError("bad"); }),
+               InputError);
+}
+
+TEST(BatchWorkers, AFailedRankIsNamedAndItsErrorKeepsItsType) {
+  BatchShare first{0, 2, "cpu", 0, true}, second{2, 5, "cpu", 0, false};
+  const std::string ok = rank_outcome({first}, {{"a", "b"}}, {nullptr});
+  std::exception_ptr boom;
+  try {
+    throw SimulationError("the Newmark solve did not converge", {1});
+  } catch (...) {
+    boom = std::current_exception();
+  }
+  const std::string failed = rank_outcome({second}, {{}}, {boom});
+  EXPECT_EQ(merge_rank_outcomes({ok, rank_outcome({second}, {{"c", "d", "e"}}, {nullptr})}, 5),
+            (std::vector<std::string>{"a", "b", "c", "d", "e"}));
+  try {
+    merge_rank_outcomes({ok, failed}, 5);
+    FAIL() << "no error";
+  } catch (const SimulationError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("rank 1 of 2 (host ", 0), 0u) << e.what();
+    EXPECT_NE(std::string(e.what()).find("the Newmark solve did not converge"), std::string::npos);
+    EXPECT_EQ(e.items, std::vector<int>{3});  // item 1 of the share that starts at 2
+  }
+  std::exception_ptr input;
+  try {
+    throw InputError("scene.json: object.mesh: no such file");
+  } catch (...) {
+    input = std::current_exception();
+  }
+  EXPECT_THROW(merge_rank_outcomes({rank_outcome({first}, {{}}, {input}), ok}, 4), InputError);
+  EXPECT_THROW(merge_rank_outcomes({ok}, 3), std::logic_error);  // a count unlike the batch's
+}
+
+TEST(ComputeDevice, NamesAndTheirGpus) {
+  EXPECT_FALSE(runs_on_gpu("cpu"));
+  EXPECT_TRUE(runs_on_gpu("cuda"));
+  EXPECT_TRUE(runs_on_gpu("cuda:1"));
+  EXPECT_TRUE(device_gpus("cpu").empty());
+  EXPECT_EQ(device_gpus("cuda:2"), std::vector<int>{2});
+  EXPECT_EQ(gpu_device(5), "cuda:5");
+  EXPECT_FALSE(device_gpus("cuda").empty());  // at least GPU 0, whose construction says why it is missing
+  for (const char* bad : {"cuda:", "cuda:x", "cuda:-1", "gpu", "cuda:1a"})
+    EXPECT_THROW(device_gpus(bad), InputError) << bad;
+  EXPECT_EQ(describe_device("cpu"), "cpu");
+}
+
+}  // namespace
+}  // namespace ssc
