@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <limits>
 
 #include "codegen/cuda_source.h"
 #include "runtime/errors.h"
@@ -288,12 +289,15 @@ void GpuTimestep::Impl::decide_grid_solves() {
 // Blocks per batch item for a grid kernel over `work` threads' worth of nodes or cells:
 // one node per thread (SSC_GPU_GRID_SPREAD=s: s per thread), at most what keeps every
 // block of the batch resident.
-unsigned GpuTimestep::Impl::grid_blocks(const PlannedKernel& k, long work) const {
+long GpuTimestep::Impl::wanted_blocks(long work) const {
   double spread = 1;
   if (const char* e = std::getenv("SSC_GPU_GRID_SPREAD")) spread = std::max(0.01, std::atof(e));
-  const long want = long(std::ceil(double(work) / (kGridBlock * spread)));
+  return std::clamp<long>(long(std::ceil(double(work) / (kGridBlock * spread))), 1, kMaxGridBlocks);
+}
+
+unsigned GpuTimestep::Impl::grid_blocks(const PlannedKernel& k, long work) const {
   const long fit = std::min<long>(kMaxGridBlocks, grid_capacity.at(k.name) / batch);
-  return unsigned(std::clamp<long>(want, 1, std::max<long>(1, fit)));
+  return unsigned(std::clamp<long>(wanted_blocks(work), 1, std::max<long>(1, fit)));
 }
 
 void GpuTimestep::Impl::ensure_adjoint() {
@@ -837,6 +841,16 @@ const std::vector<int>& GpuTimestep::cg_iterations() const { return impl_->cg_it
 const std::vector<int>& GpuTimestep::adjoint_cg_iterations() const { return impl_->adjoint_cg_iterations; }
 double GpuTimestep::compile_seconds() const { return impl_->compile_s; }
 int GpuTimestep::kernel_count() const { return int(impl_->functions.size()); }
+
+int GpuTimestep::resident_items() const {
+  const Impl& m = *impl_;
+  if (m.grid_capacity.empty()) return std::numeric_limits<int>::max();
+  const long want = m.wanted_blocks(std::max({8L * m.sizes.cell, long(m.sizes.node), long(m.sizes.band)}));
+  long items = std::numeric_limits<int>::max();
+  for (const auto& [name, capacity] : m.grid_capacity)
+    items = std::min(items, std::max(1L, long(capacity) / std::max(1L, std::min<long>(want, capacity))));
+  return int(items);
+}
 std::vector<GpuKernelTiming> GpuTimestep::timings() const {
   std::vector<GpuKernelTiming> out;
   for (const auto& [n, t] : impl_->timing) out.push_back(t);

@@ -134,6 +134,11 @@ class GpuTimestep : public StepBackend {
   std::vector<GpuKernelTiming> timings() const;  // per kernel, with options.profile
   double compile_seconds() const;
   int kernel_count() const;
+  // The largest batch whose solves all run as persistent kernels with the blocks per item a
+  // batch of one gets. Up to it an item's values do not depend on the items beside it; a
+  // larger batch gets fewer blocks per item or host-driven solves, which sum in other orders
+  // (other bits). INT_MAX where grid solves are off (every batch then solves alike).
+  int resident_items() const;
 
  private:
   struct Impl;  // runtime/cuda_timestep_impl.h

@@ -147,6 +147,8 @@ struct GpuTimestep::Impl {
                        const std::string& tag, int reference_mode);
   void decide_grid_solves();
   unsigned grid_blocks(const PlannedKernel& k, long work) const;
+  // Blocks per item a grid kernel over `work` nodes would take with the device to itself.
+  long wanted_blocks(long work) const;
   // iterations_out: assigned the solve's iterations per item, or added to with reference_mode != 0
   // (the step's adjoint time-step solves, summed).
   void grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it, cu::DevicePtr iterations,

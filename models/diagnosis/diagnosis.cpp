@@ -7,6 +7,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -162,8 +163,12 @@ std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const Diagnos
       fits[k].failure = e.what();
     }
   };
-  std::vector<int> gpus;
-  if (runs_on_gpu(c.options.device) && ranks::count() == 1) gpus = device_gpus(c.options.device);
+  std::vector<int> gpus;  // a fit's thread each, on its GPU (SSC_FITS_PER_GPU: that many threads per GPU)
+  if (runs_on_gpu(c.options.device) && ranks::count() == 1) {
+    const char* per = std::getenv("SSC_FITS_PER_GPU");
+    for (int k = 0, n = per ? std::max(1, std::atoi(per)) : 1; k < n; ++k)
+      for (int g : device_gpus(c.options.device)) gpus.push_back(g);
+  }
   if (gpus.size() <= 1 || names.size() <= 1) {
     for (size_t k = 0; k < names.size(); ++k) fit(k, c);
   } else {

@@ -1,11 +1,13 @@
 // A round's points as a batch over the run's workers (see batch_evaluation.h).
 #include "models/optim/batch_evaluation.h"
 
+#include <limits>
 #include <numeric>
 
 #include "models/io/byte_record.h"
 #include "models/sim/batch_workers.h"
 #include "models/sim/compute_device.h"
+#include "runtime/cuda_runtime.h"
 #include "runtime/errors.h"
 
 namespace ssc {
@@ -46,43 +48,54 @@ std::vector<PointEvaluation> evaluate_share(BatchSimulations& sims, const BatchS
     for (size_t i = 0; i < pending.size(); ++i) out[size_t(pending[i])].residuals = std::move(r[i]);
     return c;
   };
-  std::vector<int> pending(static_cast<size_t>(n));
-  std::iota(pending.begin(), pending.end(), 0);
-  while (!pending.empty()) {
-    const int m = int(pending.size());
-    std::vector<int> named;
-    try {
-      Simulation& sim = sims.batch(share.worker, share.device, m);
-      // Places beyond m (a larger batch kept on the GPU) run copies of the first point.
-      for (int i = 0; i < sim.batch(); ++i)
-        sim.set_parameters(i, with_values(base, names, point(pending[size_t(i < m ? i : 0)])));
-      const std::vector<CostGradient> r = run(sim, pending);
-      for (int i = 0; i < m; ++i) out[size_t(pending[size_t(i)])].value = r[size_t(i)];
-      return out;
-    } catch (const SimulationError& e) {
-      sims.forget(share.worker);
-      for (int item : e.items) named.push_back(pending[size_t(item < m ? item : 0)]);
-      if (named.empty() && m == 1) named.push_back(pending[0]);
-      if (named.empty()) break;
-      for (int s : named) {
+  // Points `pending` as one batch, failed ones dropped and the rest run again.
+  auto run_points = [&](std::vector<int> pending) {
+    while (!pending.empty()) {
+      const int m = int(pending.size());
+      std::vector<int> named;
+      try {
+        Simulation& sim = sims.batch(share.worker, share.device, m);
+        // Places beyond m (a larger batch kept on the GPU) run copies of the first point.
+        for (int i = 0; i < sim.batch(); ++i)
+          sim.set_parameters(i, with_values(base, names, point(pending[size_t(i < m ? i : 0)])));
+        const std::vector<CostGradient> r = run(sim, pending);
+        for (int i = 0; i < m; ++i) out[size_t(pending[size_t(i)])].value = r[size_t(i)];
+        return;
+      } catch (const SimulationError& e) {
+        sims.forget(share.worker);
+        for (int item : e.items) named.push_back(pending[size_t(item < m ? item : 0)]);
+        if (named.empty() && m == 1) named.push_back(pending[0]);
+        if (named.empty()) break;
+        for (int s : named) {
+          out[size_t(s)].ok = false;
+          out[size_t(s)].failure = e.what();
+        }
+      }
+      std::vector<int> rest;
+      for (int s : pending)
+        if (out[size_t(s)].ok) rest.push_back(s);
+      pending = rest;
+    }
+    for (int s : pending) {
+      try {
+        const std::unique_ptr<Simulation> sim = sims.make(share.device, 1);
+        sim->set_parameters(0, with_values(base, names, point(s)));
+        out[size_t(s)].value = run(*sim, {s})[0];
+      } catch (const SimulationError& e) {
         out[size_t(s)].ok = false;
         out[size_t(s)].failure = e.what();
       }
     }
-    std::vector<int> rest;
-    for (int s : pending)
-      if (out[size_t(s)].ok) rest.push_back(s);
-    pending = rest;
-  }
-  for (int s : pending) {
-    try {
-      const std::unique_ptr<Simulation> sim = sims.make(share.device, 1);
-      sim->set_parameters(0, with_values(base, names, point(s)));
-      out[size_t(s)].value = run(*sim, {s})[0];
-    } catch (const SimulationError& e) {
-      out[size_t(s)].ok = false;
-      out[size_t(s)].failure = e.what();
-    }
+  };
+  const int limit = sims.batch_limit(share.worker, share.device);
+  const int turns = n <= limit ? 1 : (n + limit - 1) / limit;
+  for (int t = 0; t < turns; ++t) {
+    if (share.reports && on_step && turns > 1)
+      options.on_step = [&, t](int done, int total) { on_step(t * total + done, turns * total); };
+    const int first = t * (n / turns) + std::min(t, n % turns);  // turns of equal size, the first n % turns one larger
+    std::vector<int> turn(static_cast<size_t>(n / turns + (t < n % turns ? 1 : 0)));
+    std::iota(turn.begin(), turn.end(), first);
+    run_points(turn);
   }
   return out;
 }
@@ -128,7 +141,18 @@ BatchSimulations::BatchSimulations(const Problem& problem, std::string device)
 BatchSimulations::~BatchSimulations() = default;
 
 void BatchSimulations::reserve_workers(int count) {
-  if (int(batches_.size()) < count) batches_.resize(size_t(count));
+  if (int(batches_.size()) < count) batches_.resize(size_t(count)), limits_.resize(size_t(count), 0);
+}
+
+int BatchSimulations::batch_limit(int worker, const std::string& device) {
+  if (!runs_on_gpu(device)) return std::numeric_limits<int>::max();
+  int& limit = limits_.at(size_t(worker));
+  if (limit == 0) {
+    std::unique_ptr<Simulation>& b = batches_.at(size_t(worker));
+    if (!b) b = make(device, 1);
+    limit = b->gpu()->resident_items();
+  }
+  return limit;
 }
 
 Simulation& BatchSimulations::batch(int worker, const std::string& device, int n) {

@@ -20,7 +20,8 @@ namespace ssc {
 // Each worker's batched simulation of the last round, kept while its number of points stays
 // the same, so that a GPU's modules, buffers and captured graphs are set up once. On a GPU,
 // where a step of a small batch costs what it costs for one, a batch whose starts finish is
-// kept and its free places run copies of an active start.
+// kept and its free places run copies of an active start; a share larger than the GPU holds
+// resident runs in turns (batch_limit).
 class BatchSimulations {
  public:
   BatchSimulations(const Problem& problem, std::string device);
@@ -30,6 +31,10 @@ class BatchSimulations {
   // Worker `worker`'s simulation (on `device`, "cpu" or "cuda:K") with at least n items (exactly n on the CPU).
   Simulation& batch(int worker, const std::string& device, int n);
   void forget(int worker);  // after a failure: no half-run state carries over
+  // The most points a worker runs as one batch: on a GPU its resident batch
+  // (GpuTimestep::resident_items), so that a point's values do not depend on how the points
+  // are shared among GPUs; larger shares run in turns. No limit on the CPU.
+  int batch_limit(int worker, const std::string& device);
   std::unique_ptr<Simulation> make(const std::string& device, int n) const;
   const std::string& device() const { return device_; }
   const Problem& problem() const { return problem_; }
@@ -38,6 +43,7 @@ class BatchSimulations {
   const Problem& problem_;
   std::string device_;
   std::vector<std::unique_ptr<Simulation>> batches_;  // per worker
+  std::vector<int> limits_;                           // per worker, 0: not known yet
 };
 
 struct PointEvaluation {

@@ -38,9 +38,18 @@ for g in 1 "$gpus"; do
   python3 "$root/tools/diagnosis/benchmark.py" --ssc "$ssc" --work "$work/diag-g$g" --device cuda --timing \
     ${budget} --diagnose-args "--gpus $g" --json "$work/diag-g$g/results.json" | sed "s/^/gpus $g: /"
 done
+if [ -n "${FITS_PER_GPU:-}" ]; then  # diagnose's own fits, this many side by side on one GPU
+  SSC_FITS_PER_GPU=$FITS_PER_GPU python3 "$root/tools/diagnosis/benchmark.py" --ssc "$ssc" --work "$work/diag-g1-f$FITS_PER_GPU" \
+    --device cuda --timing ${budget} --diagnose-args "--gpus 1" --json "$work/diag-g1-f$FITS_PER_GPU/results.json" |
+    sed "s/^/gpus 1, $FITS_PER_GPU fits at once: /"
+fi
 case_dir=$(ls -d "$work"/diag-g1/timing* | head -1)
 caseN=$(ls -d "$work"/diag-g$gpus/timing* | head -1)
 echo "diagnosis.json, 1 vs $gpus GPUs: $(same "$case_dir/diag/diagnosis.json" "$caseN/diag/diagnosis.json")"
+if [ -n "${FITS_PER_GPU:-}" ]; then
+  caseF=$(ls -d "$work"/diag-g1-f$FITS_PER_GPU/timing* | head -1)
+  echo "diagnosis.json, 1 GPU, $FITS_PER_GPU fits at once vs one: $(same "$case_dir/diag/diagnosis.json" "$caseF/diag/diagnosis.json")"
+fi
 
 fit="reconstruct $case_dir/fit.json --observations $case_dir/obs --fit youngs_modulus --starts 32 --iterations 10 --device cuda --quiet"
 for g in 1 2 4 8; do
