@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Several GPUs and MPI ranks against one GPU (docs/benchmarks.md, "Several GPUs"), on the
 # diagnosis timing case (a 360-step, one-camera sequence, tools/diagnosis/benchmark.py --timing):
-#   1. ssc diagnose with --gpus 1, then with every visible GPU: wall times, and whether
-#      diagnosis.json is the same apart from times and the device;
+#   1. ssc diagnose with --gpus 1, 2 and every visible GPU: wall times, and whether
+#      diagnosis.json is the same apart from times, the device and the run's folder;
 #   2. ssc reconstruct, 32 starts, on 1, 2, 4, ... GPUs up to every visible one: the same check;
 #   3. mpirun -n 2 ssc reconstruct (one GPU per rank where there are two) against one process.
 # Usage: tools/bench/multi-gpu.sh BUILD_DIR [WORK_DIR]   (STARTS, ITERATIONS: the diagnosis's budget)
@@ -14,15 +14,15 @@ ssc="$build/bin/ssc"
 gpus=$(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | wc -l)
 echo "== $gpus GPU(s): $(nvidia-smi --query-gpu=name --format=csv,noheader 2>/dev/null | sort | uniq -c | xargs)"
 mkdir -p "$work"
-same() {  # same JSON apart from times and the device
+same() {  # same JSON apart from times, the device and the run's own folder in messages
   python3 - "$1" "$2" <<'PY'
-import json, sys
+import json, re, sys
 def strip(x):
     if isinstance(x, dict):
         return {k: strip(v) for k, v in x.items() if k not in ("seconds", "wall_seconds", "device", "provenance")}
     if isinstance(x, list):
         return [strip(v) for v in x]
-    return x
+    return re.sub(r"/(diag|fit)-[\w-]+/", "/RUN/", x) if isinstance(x, str) else x
 a, b = (strip(json.load(open(p))) for p in sys.argv[1:3])
 print("same" if a == b else "DIFFERENT")
 PY
@@ -33,19 +33,21 @@ clock() {  # runs the command, prints its wall time in seconds
 }
 
 budget="--starts ${STARTS:-8} --iterations ${ITERATIONS:-30}"
-for g in 1 "$gpus"; do
-  [ "$g" = 1 ] && [ "$gpus" = 1 ] && [ -d "$work/diag-g1" ] && continue
+for g in $(printf "%s\n" 1 2 "$gpus" | awk -v n="$gpus" '$1 <= n' | sort -nu); do
   python3 "$root/tools/diagnosis/benchmark.py" --ssc "$ssc" --work "$work/diag-g$g" --device cuda --timing \
     ${budget} --diagnose-args "--gpus $g" --json "$work/diag-g$g/results.json" | sed "s/^/gpus $g: /"
 done
-if [ -n "${FITS_PER_GPU:-}" ]; then  # diagnose's own fits, this many side by side on one GPU
+if [ -n "${FITS_PER_GPU:-}" ]; then  # diagnose's own fits, this many side by side on one GPU (default 2)
   SSC_FITS_PER_GPU=$FITS_PER_GPU python3 "$root/tools/diagnosis/benchmark.py" --ssc "$ssc" --work "$work/diag-g1-f$FITS_PER_GPU" \
     --device cuda --timing ${budget} --diagnose-args "--gpus 1" --json "$work/diag-g1-f$FITS_PER_GPU/results.json" |
     sed "s/^/gpus 1, $FITS_PER_GPU fits at once: /"
 fi
 case_dir=$(ls -d "$work"/diag-g1/timing* | head -1)
-caseN=$(ls -d "$work"/diag-g$gpus/timing* | head -1)
-echo "diagnosis.json, 1 vs $gpus GPUs: $(same "$case_dir/diag/diagnosis.json" "$caseN/diag/diagnosis.json")"
+for g in 2 "$gpus"; do
+  [ "$g" -gt "$gpus" ] || [ "$g" = 1 ] && continue
+  caseN=$(ls -d "$work"/diag-g$g/timing* | head -1)
+  echo "diagnosis.json, 1 vs $g GPUs: $(same "$case_dir/diag/diagnosis.json" "$caseN/diag/diagnosis.json")"
+done
 if [ -n "${FITS_PER_GPU:-}" ]; then
   caseF=$(ls -d "$work"/diag-g1-f$FITS_PER_GPU/timing* | head -1)
   echo "diagnosis.json, 1 GPU, $FITS_PER_GPU fits at once vs one: $(same "$case_dir/diag/diagnosis.json" "$caseF/diag/diagnosis.json")"
