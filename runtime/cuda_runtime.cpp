@@ -12,6 +12,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <shared_mutex>
 
 #include "codegen/cuda_source.h"
 #include "runtime/errors.h"
@@ -52,6 +56,16 @@ namespace {
 
 using gpu_detail::kBlock;
 
+// Per GPU ordinal: stream captures take it alone, context-wide waits share it (Impl::synchronize).
+std::shared_mutex& capture_lock(int ordinal) {
+  static std::mutex guard;
+  static std::map<int, std::unique_ptr<std::shared_mutex>> locks;
+  std::lock_guard<std::mutex> lock(guard);
+  std::unique_ptr<std::shared_mutex>& m = locks[ordinal];
+  if (!m) m = std::make_unique<std::shared_mutex>();
+  return *m;
+}
+
 bool disabled_by_env(const char* name) {
   const char* e = std::getenv(name);
   return e && std::string(e) == "0";
@@ -69,6 +83,7 @@ std::string solve_failure(const std::string& what, int item, const double* state
 
 GpuTimestep::Impl::~Impl() {
   if (!d) return;
+  std::shared_lock<std::shared_mutex> no_capture(capture_lock(options.ordinal));  // frees may wait for the device
   d->CtxSetCurrent(ctx);
   for (Buffer* x : {&tensor_arena, &adjoint_arena, &saved_adjoints, &chain_staging})
     if (x->ptr) d->MemFree(x->ptr);
@@ -86,6 +101,7 @@ GpuTimestep::Impl::~Impl() {
 GpuTimestep::Impl::Buffer GpuTimestep::Impl::alloc(size_t bytes) {
   Buffer b;
   b.bytes = std::max<size_t>(bytes, 16);
+  std::shared_lock<std::shared_mutex> no_capture(capture_lock(options.ordinal));
   cu::check(d->MemAlloc(&b.ptr, b.bytes), "cuMemAlloc");
   cu::check(d->MemsetD8(b.ptr, 0, b.bytes), "cuMemsetD8");
   return b;
@@ -171,6 +187,7 @@ void GpuTimestep::Impl::compile_and_load(const std::vector<const PlannedKernel*>
   const auto start = std::chrono::steady_clock::now();
   const std::vector<CompiledKernel> compiled = compile_kernels(sources, no);
   compile_s += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::shared_lock<std::shared_mutex> no_capture(capture_lock(options.ordinal));
   for (const CompiledKernel& c : compiled) {
     cu::Module m;
     cu::check(d->ModuleLoadData(&m, c.image.data()), ("cuModuleLoadData " + c.name).c_str());
@@ -202,6 +219,7 @@ void GpuTimestep::Impl::allocate_scratch(const std::vector<PlannedKernel>& kerne
     auto it = scratch.find(n);
     if (it != scratch.end() && it->second.bytes >= bytes) continue;
     if (it != scratch.end()) {  // captured graphs hold the old pointer: capture anew
+      std::shared_lock<std::shared_mutex> no_capture(capture_lock(options.ordinal));
       d->MemFree(it->second.ptr);
       for (auto& [tag, e] : graph_execs) d->GraphExecDestroy(e);
       graph_execs.clear();
@@ -293,6 +311,11 @@ long GpuTimestep::Impl::wanted_blocks(long work) const {
   double spread = 1;
   if (const char* e = std::getenv("SSC_GPU_GRID_SPREAD")) spread = std::max(0.01, std::atof(e));
   return std::clamp<long>(long(std::ceil(double(work) / (kGridBlock * spread))), 1, kMaxGridBlocks);
+}
+
+void GpuTimestep::Impl::synchronize(const char* what) {
+  std::shared_lock<std::shared_mutex> shared(capture_lock(options.ordinal));
+  cu::check(d->CtxSynchronize(), what);
 }
 
 unsigned GpuTimestep::Impl::grid_blocks(const PlannedKernel& k, long work) const {
@@ -444,7 +467,7 @@ void GpuTimestep::Impl::submit(Pending& pl, cu::Stream stream) {
     cu::check(d->LaunchKernel(pl.function, pl.grid_x, pl.grid_y, 1, pl.block, 1, 1, 0, stream, args.data(), nullptr),
               ("cuLaunchKernel " + name).c_str());
   if (options.profile) {
-    cu::check(d->CtxSynchronize(), ("kernel " + name).c_str());
+    synchronize(("kernel " + name).c_str());
     GpuKernelTiming& t = timing[name];
     t.name = name;
     t.launches++;
@@ -467,6 +490,7 @@ void GpuTimestep::Impl::close_segment() {
   if (!use_graphs) return;
   if (!replaying && !pending.empty()) {
     cu::Graph captured = nullptr;
+    std::unique_lock<std::shared_mutex> alone(capture_lock(options.ordinal));
     cu::check(d->StreamBeginCapture(capture_stream, cu::kCaptureModeThreadLocal), "cuStreamBeginCapture");
     try {
       for (Pending& pl : pending) submit(pl, capture_stream);
@@ -799,7 +823,10 @@ void GpuTimestep::chain_adjoints(const std::vector<std::pair<int, int>>& from_to
     bytes += m.adjoints[from].bytes;
   }
   if (m.chain_staging.bytes < bytes) {
-    if (m.chain_staging.ptr) m.d->MemFree(m.chain_staging.ptr);
+    if (m.chain_staging.ptr) {
+      std::shared_lock<std::shared_mutex> no_capture(capture_lock(m.options.ordinal));
+      m.d->MemFree(m.chain_staging.ptr);
+    }
     m.chain_staging = m.alloc(bytes);
   }
   size_t at = 0;

@@ -112,7 +112,7 @@ void GpuTimestep::Impl::launch_plan(const PlannedKernel* begin, const PlannedKer
     solve(o);
   }
   close_segment();
-  cu::check(d->CtxSynchronize(), what);
+  synchronize(what);
   read_solve_checks();
 }
 

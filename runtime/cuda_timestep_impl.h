@@ -147,6 +147,12 @@ struct GpuTimestep::Impl {
                        const std::string& tag, int reference_mode);
   void decide_grid_solves();
   unsigned grid_blocks(const PlannedKernel& k, long work) const;
+  // cuCtxSynchronize, which must not meet another thread's stream capture on this GPU: the
+  // simulations of one process share each GPU's context (diagnose's fits side by side), and a
+  // context-wide wait fails the capture under way (CUDA error 900). Captures hold this GPU's
+  // lock alone (capture_lock), waits share it, and so do frees and module loads and unloads,
+  // which may wait for the device too.
+  void synchronize(const char* what);
   // Blocks per item a grid kernel over `work` nodes would take with the device to itself.
   long wanted_blocks(long work) const;
   // iterations_out: assigned the solve's iterations per item, or added to with reference_mode != 0
