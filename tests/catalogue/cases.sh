@@ -402,6 +402,8 @@ def gpu.simulate 4 'GPU error' 'simulate --device cuda without a GPU' \
   'fixture ball.json' 'ssc simulate ball.json --out out --device cuda'
 def gpu.gradient 4 'GPU error' 'gradient --device cuda without a GPU' \
   'obs; fixture ball.json' 'ssc gradient ball.json --observations obs --device cuda'
+def gpu.reconstruct-gpus 4 'GPU error' 'reconstruct --device cuda --gpus 2 without a GPU' \
+  'obs; fixture ball.json' 'ssc reconstruct ball.json --observations obs --fit youngs_modulus --device cuda --gpus 2 --out out'
 
 # ---- usage errors (CLI11) ----
 def usage.unknown-option 1 'frobnicate' 'an option that does not exist' \
@@ -416,6 +418,8 @@ def usage.unknown-subcommand 1 'simulat' 'misspelt subcommand' \
   'fixture ball.json' 'ssc simulat ball.json --out out'
 def usage.device 1 'device' '--device tpu' \
   'fixture ball.json' 'ssc simulate ball.json --out out --device tpu'
+def usage.gpus-zero 1 'gpus' '--gpus 0' \
+  'obs; fixture ball.json' 'ssc reconstruct ball.json --observations obs --fit youngs_modulus --gpus 0 --out out'
 def usage.missing-fit 1 '--fit' 'reconstruct without --fit' \
   'obs; fixture ball.json' 'ssc reconstruct ball.json --observations obs --out out'
 def usage.starts-not-number 1 'starts' 'reconstruct --starts abc' \
