@@ -237,6 +237,9 @@ def set.empty-component 2 '--set && material..density' '--set with an empty key 
   'fixture ball.json' 'ssc simulate ball.json --out out --set material..density=1'
 
 # ---- parameter names and ranges ----
+def param.other-scene 2 'result.json && the fit ran on && another body' 'residuals --params given the result.json of a fit of another scene (a larger ball; its ssc.json names the scene)' \
+  'obs; fixture ball.json; ssc reconstruct ball.json --observations obs --fit youngs_modulus --starts 1 --iterations 1 --device cpu --quiet --out fit >/dev/null 2>&1; scene ball.json other.json "\"radius\": 0.1" "\"radius\": 0.12"' \
+  'ssc residuals other.json --observations obs --params fit/result.json --out res'
 def param.gradient-unknown 2 'youngs_modulos' 'unknown name in gradient --params' \
   'obs; fixture ball.json' 'ssc gradient ball.json --observations obs --params youngs_modulos'
 def param.fit-unknown 2 'stiffnes' 'unknown name in reconstruct --fit' \

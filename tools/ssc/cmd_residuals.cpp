@@ -14,6 +14,7 @@
 #include "models/diagnosis/residuals.h"
 #include "models/io/folder_hash.h"
 #include "models/io/output_dir.h"
+#include "models/io/run_record.h"
 #include "models/io/svg_plot.h"
 #include "models/io/text_file.h"
 #include "models/sim/compute_device.h"
@@ -70,9 +71,14 @@ Command register_residuals(CLI::App& app) {
     std::vector<std::string> overrides = o->overrides;
     overrides.insert(overrides.end(), fitted.set.begin(), fitted.set.end());
     const Problem problem = load_problem(o->scene, overrides, o->observations, o->phi_max, fitted.names);
+    const nlohmann::json observations = folder_fingerprint(o->observations);
+    if (const std::string differs =
+            check_fitted_on(fitted, o->params, problem.scene, o->scene, observations.value("fnv1a64", ""));
+        !differs.empty())
+      warn("params", differs);
     OutputDir out(o->out, {o->scene, o->observations, o->params, problem.scene.object.path});
     out.manifest()["scene"] = {{"file", o->scene}, {"resolved", problem.scene.resolved}};
-    out.manifest()["observations"] = folder_fingerprint(o->observations);
+    out.manifest()["observations"] = observations;
     if (!o->params.empty()) out.manifest()["params"] = {{"file", o->params}, {"set", fitted.set}};
     out.manifest()["device"] = describe_device(device);
     size_t points = 0;
