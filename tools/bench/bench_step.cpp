@@ -5,10 +5,11 @@
 // forward+adjoint steps on the CPU interpreter; on the GPU (when one is usable) the
 // generated forward step, the generated adjoint step, and a whole 10-step J_SSC
 // gradient evaluation per step (host cost and copies included), single
-// and batched; one frame's J_SSC with its cotangents on the host. Figures go into
-// docs/benchmarks.md.
+// and batched; one frame's J_SSC with its cotangents on the host. With SSC_PEER_SCENE set, also
+// the JAX peer's dragon (tools/bench/peer-compare.sh). Figures go into docs/benchmarks.md.
 #include <benchmark/benchmark.h>
 
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <string>
@@ -34,6 +35,8 @@ Body& body(const std::string& name) {
     b = std::make_unique<Body>();
     if (name == "teddy")
       b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/teddy-sized.json");
+    else if (name == "peer-dragon")  // the JAX peer's scene, exactly its settings (tools/bench/peer-compare.sh)
+      b->scene = load_scene(std::getenv("SSC_PEER_SCENE"));
     else if (name == "torus-implicit")
       b->scene = load_scene(std::string(SSC_SOURCE_DIR) + "/examples/torus.json",
                             {"grid.band_width=0", "solver.contact=\"implicit\""});
@@ -206,6 +209,20 @@ void register_all() {
     benchmark::RegisterBenchmark(("GpuGradientStep/" + name + "/double").c_str(), BM_GpuGradientStep, name,
                                  std::string("double"))
         ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
+  }
+  // The JAX peer's dragon where SSC_PEER_SCENE names its scene (tools/bench/peer-compare.sh).
+  if (const char* peer = std::getenv("SSC_PEER_SCENE"); peer && *peer) {
+    const std::string name = "peer-dragon";
+    benchmark::RegisterBenchmark(("CpuForwardStep/" + name).c_str(), BM_CpuForwardStep, name)
+        ->Arg(1)->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(("CpuGradientStep/" + name).c_str(), BM_CpuGradientStep, name)
+        ->Unit(benchmark::kMillisecond);
+    for (const std::string real : {"double", "float"}) {
+      benchmark::RegisterBenchmark(("GpuForwardStep/" + name + "/" + real).c_str(), BM_GpuForwardStep, name, real)
+          ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
+      benchmark::RegisterBenchmark(("GpuAdjointStep/" + name + "/" + real).c_str(), BM_GpuAdjointStep, name, real)
+          ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
+    }
   }
   // torus-extensions: friction, two stiffness fields, air drag
   for (const std::string ext : {"torus-extensions", "torus-implicit", "torus-updated", "torus-neo-hookean"}) {
