@@ -29,7 +29,7 @@ set(SSC_TESTS_unit
 set(SSC_TESTS_physics
   AirDrag CorotationUpdate ExtensionSwitches Friction GradientPipeline HeterogeneousStiffness NeoHookean
   PhysicsBatch PhysicsBounce PhysicsCantilever PhysicsFreeFall PhysicsGrid PhysicsRigidMotion StiffContact
-  EnergyAudit MatchCheck RunChecks
+  EnergyAudit MatchCheck RunChecks BatchEvaluation
   ReconstructionEndToEnd ReconstructionFailures ReconstructionLeastSquares
   FrameTimes FrictionSlope GoodnessOfFit RestingStart TablePoints CalculixDrops PrepareSynthetic PrepareRealRecording
   GpuForward.ExplodingGradientFailsCleanlyOnTheCpu GpuKernels.RandomStateAndEveryAdjointGroupOnTheCpu)

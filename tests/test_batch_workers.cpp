@@ -1,15 +1,23 @@
 // Sharing a batch among workers (models/sim/batch_workers.h), the device names
 // (models/sim/compute_device.h) and the records the ranks send each other
-// (models/io/byte_record.h, models/optim/batch_evaluation.h), on one process.
+// (models/io/byte_record.h, models/optim/batch_evaluation.h), on one process; and that a
+// point's values do not depend on the batch it runs in.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
 #include <stdexcept>
 
+#include "models/cost/surface_constraint.h"
 #include "models/io/byte_record.h"
 #include "models/optim/batch_evaluation.h"
 #include "models/sim/batch_workers.h"
 #include "models/sim/compute_device.h"
+#include "runtime/cuda_runtime.h"
 #include "runtime/errors.h"
+#include "tests/ssc_binary.h"
 
 namespace ssc {
 namespace {
@@ -136,6 +144,46 @@ TEST(ComputeDevice, NamesAndTheirGpus) {
   for (const char* bad : {"cuda:", "cuda:x", "cuda:-1", "gpu", "cuda:1a"})
     EXPECT_THROW(device_gpus(bad), InputError) << bad;
   EXPECT_EQ(describe_device("cpu"), "cpu");
+}
+
+// What a split among GPUs and ranks relies on: a point evaluated in a batch gives the bits it
+// gives alone (cost, gradient and residual vector), on the CPU and, where there is one, on the
+// GPU. The catalogue's ball (4 steps), observed by ssc.
+TEST(BatchEvaluation, APointsValuesDoNotDependOnTheBatchBesideIt) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("ssc-batch-evaluation-" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string scene = std::string(SSC_SOURCE_DIR) + "/tests/catalogue/fixtures/ball.json";
+  ASSERT_EQ(std::system(("'" + ssc_binary_path() + "' observe '" + scene + "' --out '" + (dir / "obs").string() +
+                         "' --device cpu --quiet").c_str()),
+            0);
+  const Problem problem = load_problem(scene, {}, (dir / "obs").string(), 0, {"youngs_modulus"});
+  const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
+  const SurfaceResiduals residuals(cost, problem.frames);
+  const PhysicalParameters base = PhysicalParameters::from_scene(problem.scene);
+  const std::vector<std::string> names = {"youngs_modulus"};
+  std::vector<Eigen::VectorXd> points;
+  for (double E : {3000.0, 5000.0, 8000.0}) points.push_back(Eigen::VectorXd::Constant(1, E));
+  std::vector<std::string> devices = {"cpu"};
+  if (gpu_unavailable_reason().empty()) devices.push_back("cuda:0");
+  for (const std::string& device : devices) {
+    BatchSimulations together(problem, device);
+    const std::vector<PointEvaluation> all = evaluate_batch(together, cost, base, names, points, true);
+    const std::vector<PointEvaluation> all_r = evaluate_batch(together, cost, base, names, points, false, &residuals);
+    for (size_t k = 0; k < points.size(); ++k) {
+      BatchSimulations alone(problem, device);
+      const PointEvaluation one = evaluate_batch(alone, cost, base, names, {points[k]}, true)[0];
+      const PointEvaluation one_r = evaluate_batch(alone, cost, base, names, {points[k]}, false, &residuals)[0];
+      ASSERT_TRUE(all[k].ok && one.ok) << device << ": " << all[k].failure << one.failure;
+      EXPECT_GT(all[k].value.cost, 0.0) << device;
+      EXPECT_EQ(all[k].value.cost, one.value.cost) << device << ", point " << k;
+      EXPECT_EQ(all[k].value.gradient.youngs_modulus, one.value.gradient.youngs_modulus) << device << ", point " << k;
+      EXPECT_EQ(all_r[k].residuals.r, one_r.residuals.r) << device << ", point " << k;
+    }
+    EXPECT_NE(all[0].value.cost, all[2].value.cost) << "the points differ, so must their costs";
+  }
+  fs::remove_all(dir);
 }
 
 }  // namespace
