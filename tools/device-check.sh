@@ -28,7 +28,7 @@ if ! cmake --build "$BUILD" -j"$JOBS" >"$LOG/build.log" 2>&1; then
 fi
 t1=$(date +%s)
 
-FILTER='Codegen*:Nvrtc*:Gpu*'${1:+:$1}
+FILTER='Codegen*:Nvrtc*:Gpu*:BatchEvaluation*'${1:+:$1}
 echo "== tests: $FILTER"
 "$BUILD/bin/ssc_tests" --gtest_filter="$FILTER" --gtest_output=json:"$LOG/tests.json" 2>&1 | tee "$LOG/tests.txt"
 test_rc=${PIPESTATUS[0]}
