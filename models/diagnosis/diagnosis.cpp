@@ -136,8 +136,8 @@ FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const Diagnosis
   return std::move(fits[best]);
 }
 
-// Two fits side by side on one GPU: measured on the 360-step timing case (docs/benchmarks.md,
-// "Several GPUs"), 72 s against 89 s one after the other, with the same diagnosis.json.
+// Two fits side by side on one GPU: on the 360-step timing case (docs/benchmarks.md, "Several
+// GPUs"), 72 s against 89 s one after the other on one H200 machine, the same diagnosis.json.
 constexpr int kFitsPerGpu = 2;
 
 // Step 3 for every candidate the shared batch did not fit, in `order`. On the GPU (with one
