@@ -304,9 +304,7 @@ void GpuTimestep::Impl::decide_grid_solves() {
   extension_grid = phases == 2 ? "extension_pcg_grid_two_phase" : "extension_pcg_grid";
 }
 
-// Blocks per batch item for a grid kernel over `work` threads' worth of nodes or cells:
-// one node per thread (SSC_GPU_GRID_SPREAD=s: s per thread), at most what keeps every
-// block of the batch resident.
+// One node per thread (SSC_GPU_GRID_SPREAD=s: s per thread).
 long GpuTimestep::Impl::wanted_blocks(long work) const {
   double spread = 1;
   if (const char* e = std::getenv("SSC_GPU_GRID_SPREAD")) spread = std::max(0.01, std::atof(e));
@@ -318,6 +316,8 @@ void GpuTimestep::Impl::synchronize(const char* what) {
   cu::check(d->CtxSynchronize(), what);
 }
 
+// Blocks per batch item for a grid kernel over `work` threads' worth of nodes or cells: those
+// wanted, at most what keeps every block of the batch resident.
 unsigned GpuTimestep::Impl::grid_blocks(const PlannedKernel& k, long work) const {
   const long fit = std::min<long>(kMaxGridBlocks, grid_capacity.at(k.name) / batch);
   return unsigned(std::clamp<long>(wanted_blocks(work), 1, std::max<long>(1, fit)));
