@@ -34,6 +34,21 @@ class MpiRanks : public CliTestFolder {
   int run_ranks(const std::string& args, std::string* out, std::string* err) {
     return run_with_prefix(kMpirun + " -n 2 -x OMP_NUM_THREADS=1", args, out, err);
   }
+  // The command as one process (--out one) and on two ranks (--out two), both succeeding; rank
+  // 1's scratch folder (in a TMPDIR of the test's own) is gone afterwards, and no hidden folder
+  // or lock is left beside the outputs.
+  void run_one_and_two(const std::string& args) {
+    std::string out, err;
+    ASSERT_EQ(run(args + " --out '" + (dir_ / "one").string() + "'", &out, &err), 0) << out << err;
+    fs::create_directories(dir_ / "tmp");
+    ASSERT_EQ(run_with_prefix(kMpirun + " -n 2 -x OMP_NUM_THREADS=1 -x TMPDIR='" + (dir_ / "tmp").string() + "'",
+                              args + " --out '" + (dir_ / "two").string() + "'", &out, &err),
+              0)
+        << out << err;
+    EXPECT_TRUE(fs::is_empty(dir_ / "tmp")) << "rank 1 left its scratch folder";
+    for (const auto& e : fs::directory_iterator(dir_))
+      EXPECT_NE(e.path().filename().string()[0], '.') << "left beside the outputs: " << e.path();
+  }
   const std::string kMpirun =
       "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 timeout 300 mpirun";
 };
@@ -45,27 +60,17 @@ json without_times(json j) {
 }
 
 TEST_F(MpiRanks, ReconstructOnTwoRanksGivesTheOneProcessResult) {
-  std::string out, err;
-  const std::string args = "reconstruct '" + kCase + "/scene.json' --observations '" + kCase +
-                           "/obs' --fit youngs_modulus --starts 2 --iterations 1 --optimizer lm --device cpu --quiet";
-  ASSERT_EQ(run(args + " --out '" + (dir_ / "one").string() + "'", &out, &err), 0) << out << err;
-  ASSERT_EQ(run_ranks(args + " --out '" + (dir_ / "two").string() + "'", &out, &err), 0) << out << err;
+  run_one_and_two("reconstruct '" + kCase + "/scene.json' --observations '" + kCase +
+                  "/obs' --fit youngs_modulus --starts 2 --iterations 1 --optimizer lm --device cpu --quiet");
   const json one = read_json(dir_ / "one/result.json"), two = read_json(dir_ / "two/result.json");
   EXPECT_EQ(without_times(one), without_times(two));
   EXPECT_EQ(one.at("starts").size(), 2u);
   EXPECT_NE(two.at("device").get<std::string>().find("MPI rank 0 of 2"), std::string::npos) << two.at("device");
-  // Rank 1 wrote nothing beside rank 0's output, and left no scratch folder of its own.
-  int entries = 0;
-  for (const auto& e : fs::directory_iterator(dir_)) entries += e.path().filename().string()[0] == '.';
-  EXPECT_EQ(entries, 0) << "a hidden folder or lock was left beside the outputs";
 }
 
 TEST_F(MpiRanks, SweepOnTwoRanksGivesTheOneProcessCsv) {
-  std::string out, err;
-  const std::string args = "sweep '" + kCase + "/scene.json' --observations '" + kCase +
-                           "/obs' --param youngs_modulus=40000:60000:3 --device cpu --quiet";
-  ASSERT_EQ(run(args + " --out '" + (dir_ / "one").string() + "'", &out, &err), 0) << out << err;
-  ASSERT_EQ(run_ranks(args + " --out '" + (dir_ / "two").string() + "'", &out, &err), 0) << out << err;
+  run_one_and_two("sweep '" + kCase + "/scene.json' --observations '" + kCase +
+                  "/obs' --param youngs_modulus=40000:60000:3 --device cpu --quiet");
   EXPECT_EQ(read_text(dir_ / "one/sweep.csv"), read_text(dir_ / "two/sweep.csv"));
 }
 

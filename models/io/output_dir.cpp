@@ -211,7 +211,7 @@ OutputDir::OutputDir(const std::string& target, const std::vector<std::string>& 
     register_unfinished(temp_);
     fs::remove_all(temp_, ec);
     fs::create_directories(temp_, ec);
-    if (ec) throw InputError(fmt::format("rank {}: cannot create the scratch folder {}: {}", ranks::rank(), temp_, ec.message()));
+    if (ec) throw InputError(fmt::format("cannot create this rank's scratch folder {}: {}", temp_, ec.message()));
     return;
   }
   fs::create_directories(t.parent_path(), ec);
