@@ -173,28 +173,51 @@ std::vector<ModelSpec> plane_proposals(const FittedModel& base, int heldin, int 
   return specs;
 }
 
-ModelSpec interface_proposal(const FittedModel& gradient_fit, const Problem& base, double extent) {
-  ModelSpec spec{""};
+InterfaceGuess interface_proposal(const FittedModel& gradient_fit, const Problem& base, double extent) {
+  InterfaceGuess guess;
   const std::map<std::string, double> v = values_by_name(gradient_fit);
   Eigen::Vector3d g = Eigen::Vector3d::Zero();
   for (int a = 0; a < 3; ++a)
     if (const auto it = v.find(std::string("material.stiffness_gradient.") + "xyz"[a]); it != v.end()) g[a] = it->second;
   // A gradient that changes the modulus by less than 10 % across the body proposes nothing.
-  if (gradient_fit.failed || !(g.norm() * extent > 0.1)) return spec;
-  const Eigen::Vector3d n = g.normalized(), c = base.grid.rest_center_of_mass;
+  if (gradient_fit.failed || !(g.norm() * extent > 0.1)) return guess;
+  guess.normal = g.normalized();
+  guess.offset = guess.normal.dot(base.grid.rest_center_of_mass);
   const auto e = v.find("youngs_modulus");
   const double modulus = e != v.end() ? e->second : base.scene.material.youngs_modulus;
   // The stiff side's mean modulus under the gradient, about E exp(|g| L / 4).
-  const double stiff = modulus * std::exp(g.norm() * extent / 4);
-  spec.name = "two_materials";
-  spec.overrides = {fmt::format("material.regions=[{{\"normal\":[{},{},{}],\"offset\":{},\"youngs_modulus\":{}}}]", n.x(),
-                                n.y(), n.z(), n.dot(c), stiff)};
+  guess.modulus = modulus * std::exp(g.norm() * extent / 4);
+  return guess;
+}
+
+ModelSpec two_materials_spec(const Eigen::Vector3d& normal, double offset, double modulus, const std::string& note) {
+  ModelSpec spec{"two_materials"};
+  spec.overrides = {fmt::format("material.regions=[{{\"normal\":[{},{},{}],\"offset\":{},"
+                                "\"youngs_modulus\":{}}}]",
+                                normal.x(), normal.y(), normal.z(), offset, modulus)};
   spec.extra = {"material.regions[0].youngs_modulus"};
-  spec.ranges[spec.extra[0]] = {stiff / 3, stiff * 3};
+  spec.ranges[spec.extra[0]] = {modulus / 3, modulus * 3};
   spec.log_range = true;
-  spec.note = fmt::format("an interface through the centre of mass facing ({:.2f}, {:.2f}, {:.2f}), from the fitted "
-                          "stiffness gradient",
-                          n.x(), n.y(), n.z());
+  spec.note = note;
+  return spec;
+}
+
+ModelSpec finer_grid_spec(const Scene& scene, std::string* skipped) {
+  ModelSpec spec{"finer_grid"};
+  if (scene.cell_size > 0) {
+    spec.overrides.push_back(fmt::format("grid.cell_size={}", scene.cell_size / 2));
+    spec.note = fmt::format("grid.cell_size {:g} m", scene.cell_size / 2);
+  } else if (scene.cell_size < 0 && -2 * scene.cell_size <= 300) {
+    spec.overrides.push_back(fmt::format("grid.resolution={}", int(-2 * scene.cell_size)));
+    spec.note = fmt::format("grid.resolution {}", int(-2 * scene.cell_size));
+  } else {
+    *skipped = scene.cell_size == 0 ? "the body's grid is its sdf_file's and cannot be refined"
+                                    : "grid.resolution is already above 150 cells";
+    spec.name.clear();
+    return spec;
+  }
+  // The same extension band in metres.
+  if (scene.grid.band_width > 0) spec.overrides.push_back(fmt::format("grid.band_width={}", 2 * scene.grid.band_width));
   return spec;
 }
 

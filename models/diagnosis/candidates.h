@@ -35,8 +35,22 @@ std::vector<ModelSpec> plane_proposals(const FittedModel& base, int heldin, int 
 
 // The two-material body the stiffness gradient's fit asks for: a plane through the rest
 // body's centre across the gradient, the side the gradient points to its own Young's modulus
-// (material.regions[0]), started at the gradient's ratio. Empty `name` when the gradient fit
-// gives no direction.
-ModelSpec interface_proposal(const FittedModel& gradient_fit, const Problem& base, double extent);
+// (material.regions[0]), about the gradient's mean modulus there. Not found when the gradient
+// changes the modulus by less than 10 % across the body. interface_search.h refines it.
+struct InterfaceGuess {
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // unit; n . x = offset is the interface
+  double offset = 0, modulus = 0;
+  bool found() const { return normal.squaredNorm() > 0; }
+};
+InterfaceGuess interface_proposal(const FittedModel& gradient_fit, const Problem& base, double extent);
+// The two-material model with the interface n . x = offset (n a unit vector; the side n points
+// to has its own Young's modulus, started within 3 times `modulus` of it).
+ModelSpec two_materials_spec(const Eigen::Vector3d& normal, double offset, double modulus, const std::string& note);
+
+// The discretization control: the base model on a grid of half the cell size (twice the
+// resolution), no parameter of its own. What it removes of the held-out residual is the
+// model's own discretization, which no physical candidate stands for. Empty `name` (and why
+// in `skipped`) where the grid cannot be refined: an sdf_file body's grid is the file's.
+ModelSpec finer_grid_spec(const Scene& scene, std::string* skipped);
 
 }  // namespace ssc

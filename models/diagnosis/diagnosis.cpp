@@ -14,6 +14,7 @@
 
 #include "models/diagnosis/candidates.h"
 #include "models/diagnosis/held_out.h"
+#include "models/diagnosis/interface_search.h"
 #include "models/diagnosis/measurement_fit.h"
 #include "models/diagnosis/model_fit.h"
 #include "models/diagnosis/score_test.h"
@@ -42,6 +43,14 @@ std::string percent(double x) { return fmt::format("{:.0f} %", 100 * x); }
 std::string with_unit(const std::string& name, double value) {
   const std::string unit = parameter_or_measurement_unit(name);
   return fmt::format("{:.4g}{}", value, unit == "1" ? "" : " " + unit);
+}
+
+// "youngs_modulus = 5e+04 Pa, ..." of a fit.
+std::string values_text(const FittedModel& m) {
+  std::string out;
+  for (size_t i = 0; i < m.names.size(); ++i)
+    out += fmt::format("{}{} = {}", out.empty() ? "" : ", ", m.names[i], with_unit(m.names[i], m.values[Eigen::Index(i)]));
+  return out;
 }
 
 // Step 0: the frames' split and the body's size, from the scene and observations as loaded.
@@ -103,6 +112,18 @@ std::map<std::string, FittedModel> fit_shared(Diagnosis& d, const DiagnosisConte
   return fits;
 }
 
+// The two_materials model at the searched interface, with what the search did.
+ModelSpec interface_spec(const InterfaceSearch& s, const InterfaceGuess& from, const Eigen::Vector3d& centre) {
+  const Eigen::Vector3d& n = s.best.normal;
+  const double turned = std::acos(std::clamp(n.dot(from.normal), -1.0, 1.0)) * 180 / 3.14159265358979323846;
+  return two_materials_spec(n, s.best.offset, s.best.modulus,
+                            fmt::format("an interface facing ({:.2f}, {:.2f}, {:.2f}), {:.1f} mm from the centre of "
+                                        "mass, {:.0f} degrees from the fitted stiffness gradient: the best of {} "
+                                        "geometries on the held-in frames ({:.0f} % below the gradient's)",
+                                        n.x(), n.y(), n.z(), 1e3 * (s.best.offset - n.dot(centre)), turned, s.geometries,
+                                        100 * (1 - s.heldin_cost / s.start_cost)));
+}
+
 // Step 3: a candidate that needs a batch of its own: a model switch, proposed planes (the
 // best of them), a proposed interface.
 FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const DiagnosisContext& c, const Scene& scene,
@@ -122,9 +143,11 @@ FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const Diagnosis
       *skipped = "the scene already has material regions";
     else if (gradient == shared_fits.end())
       *skipped = "its interface is proposed from the heterogeneous_stiffness fit, which was not run";
-    else if (specs.push_back(interface_proposal(gradient->second, d.base.problem, c.extent)); specs.back().name.empty())
+    else if (const InterfaceGuess guess = interface_proposal(gradient->second, d.base.problem, c.extent); !guess.found())
       *skipped = "the fitted stiffness gradient changes the modulus by less than 10 % across the body: no interface "
                  "to propose";
+    else
+      specs.push_back(interface_spec(search_interface(d.base, guess, c), guess, d.base.problem.grid.rest_center_of_mass));
   }
   if (!skipped->empty()) return FittedModel{};
   std::vector<FittedModel> fits = fit_together(specs, c, base_starts);
@@ -136,14 +159,31 @@ FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const Diagnosis
   return std::move(fits[best]);
 }
 
+// The name of the discretization control among the fits of step 3.
+const std::string kFinerGrid = "finer_grid";
+
+// Step 3 for the discretization control: the base model on a grid of half the cell size,
+// started from the base's fit. Its cost keeps the base's phi_max (by default two of the
+// base's cells): with its own, every point far from the body would cost a quarter as much.
+FittedModel fit_finer_grid(const Diagnosis& d, const DiagnosisContext& c, const Scene& scene, std::string* skipped) {
+  const ModelSpec spec = finer_grid_spec(scene, skipped);
+  if (!skipped->empty()) return FittedModel{};
+  DiagnosisContext same_cost = c;
+  same_cost.phi_max = d.base.problem.phi_max;
+  std::vector<std::map<std::string, double>> start = {values_by_name(d.base)};
+  FittedModel m = std::move(fit_together({spec}, same_cost, start)[0]);
+  m.proposal = spec.note;
+  return m;
+}
+
 // Two fits side by side on one GPU: on the 360-step timing case (docs/benchmarks.md, "Several
 // GPUs"), 72 s against 89 s one after the other on one H200 machine, the same diagnosis.json.
 constexpr int kFitsPerGpu = 2;
 
-// Step 3 for every candidate the shared batch did not fit, in `order`. On the GPU (with one
-// rank) the fits run side by side, kFitsPerGpu threads per GPU, each taking the next
-// candidate; a fit's result does not depend on which GPU ran it or what ran beside it. A
-// skipped candidate's reason goes to `skipped`.
+// Step 3 for every candidate the shared batch did not fit, in `order`, and the
+// discretization control (kFinerGrid) where asked for. On the GPU (with one rank) the fits run
+// side by side, kFitsPerGpu threads per GPU, each taking the next one; a fit's result does not
+// depend on which GPU ran it or what ran beside it. A skipped fit's reason goes to `skipped`.
 std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const DiagnosisContext& c, const Scene& scene,
                                                const std::vector<std::string>& order,
                                                const std::map<std::string, FittedModel>& shared_fits,
@@ -151,14 +191,18 @@ std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const Diagnos
                                                std::map<std::string, std::string>& skipped,
                                                const std::function<void(const std::string&)>& say) {
   std::vector<std::string> names;
+  if (c.options.finer_grid) names.push_back(kFinerGrid);  // the costliest first
   for (const std::string& name : order)
     if (!shared_fits.count(name) && !skipped.count(name)) names.push_back(name);
   std::vector<FittedModel> fits(names.size());
   std::vector<std::string> why(names.size());
   auto fit = [&](size_t k, const DiagnosisContext& on) {
-    say("fitting " + names[k] + (on.options.device == c.options.device ? "" : " on " + on.options.device));
+    say("fitting " + (names[k] == kFinerGrid ? "the base model on a grid of half the cell size" : names[k]) +
+        (on.options.device == c.options.device ? "" : " on " + on.options.device));
     try {
-      fits[k] = fit_own(*find_extension(names[k]), d, on, scene, shared_fits, base_starts, &why[k]);
+      fits[k] = names[k] == kFinerGrid
+                    ? fit_finer_grid(d, on, scene, &why[k])
+                    : fit_own(*find_extension(names[k]), d, on, scene, shared_fits, base_starts, &why[k]);
     } catch (const std::exception& e) {
       fits[k].failed = true;
       fits[k].failure = e.what();
@@ -217,9 +261,14 @@ std::vector<std::string> implausible_values(const FittedModel& m, double extent)
   return out;
 }
 
-// Step 4: each candidate's gain against its placebo, its plausibility and its event.
+// Step 4: each candidate's gain against its placebo and the discretization control, its
+// plausibility and its event.
 void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) {
   const DiagnosisOptions& o = c.options;
+  if (!d.finer_grid.failed && !d.finer_grid.frame_costs.empty()) {
+    const Gain g = cost_gain(d.base.frame_costs, d.finer_grid.frame_costs, d.heldin_frames, -1, o.bootstrap, o.seed + 57);
+    d.finer_grid_gain = g.value, d.finer_grid_gain_low = g.low, d.finer_grid_gain_high = g.high;
+  }
   const size_t most = d.placebos.empty() ? 0 : d.placebos.back().extra.size();
   auto placebo_gain = [&](size_t extra) {
     if (extra == 0) return 0.0;
@@ -242,8 +291,10 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
     const Gain g = cost_gain(d.base.frame_costs, m.frame_costs, d.heldin_frames, -1, o.bootstrap, o.seed + i);
     v.gain = g.value, v.gain_low = g.low, v.gain_high = g.high;
     v.placebo_gain = std::max(0.0, placebo_gain(extra));
+    v.finer_grid_gain = std::max(0.0, d.finer_grid_gain);
     v.implausible = implausible_values(m, c.extent);
-    v.passes = v.gain >= o.min_gain && v.gain_low > v.placebo_gain + o.margin && v.implausible.empty();
+    v.passes = v.gain >= o.min_gain && v.gain_low > std::max(v.placebo_gain, v.finer_grid_gain) + o.margin &&
+               v.implausible.empty();
     if (v.passes) named.push_back(i);
     try {
       v.event_frame = event_frame(m, o.device);
@@ -360,8 +411,9 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
           (best == d.verdicts.size() || d.verdicts[i].gain > d.verdicts[best].gain))
         best = i;
     d.lines.push_back(fmt::format("cause: none. No candidate removes {} of the held-out residual and beats its placebo "
-                                  "by {} points{}",
-                                  percent(o.min_gain), 100 * o.margin,
+                                  "{}by {} points{}",
+                                  percent(o.min_gain), d.finer_grid.failed ? "" : "and the discretization control ",
+                                  100 * o.margin,
                                   best < d.verdicts.size()
                                       ? fmt::format(" (the best, {}, removes {}, interval {} .. {})", d.verdicts[best].name,
                                                     percent(d.verdicts[best].gain), percent(d.verdicts[best].gain_low),
@@ -389,6 +441,19 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
     }
     if (!m.proposal.empty()) d.lines.push_back("proposed from the data: " + m.proposal);
   }
+  const std::string finer = fmt::format("the base model on a grid of half the cell size ({}) removes {}",
+                                        d.finer_grid.proposal, percent(d.finer_grid_gain));
+  for (size_t i = 0; i < d.verdicts.size(); ++i) {
+    const CandidateVerdict& v = d.verdicts[i];
+    if (!v.passes && v.implausible.empty() && v.gain >= o.min_gain && v.gain_low > v.placebo_gain + o.margin)
+      d.lines.push_back(fmt::format("{} would remove {} of the held-out residual but is not named: {}, so the "
+                                    "model's own discretization can explain as much",
+                                    v.name, percent(v.gain), finer));
+  }
+  if (!d.finer_grid.failed && d.finer_grid_gain >= o.min_gain)
+    d.lines.push_back(fmt::format("discretization: {} of the held-out residual; a finer grid.cell_size fits closer "
+                                  "(fitted there: {})",
+                                  finer, values_text(d.finer_grid)));
   for (size_t i = 0; i < d.verdicts.size(); ++i)
     if (!d.verdicts[i].implausible.empty() && d.verdicts[i].gain >= o.min_gain)
       d.lines.push_back(fmt::format("{} would remove {} of the held-out residual but is not named: its fit needs {}",
@@ -437,8 +502,11 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
   std::string limited;
   int models = 1, converged = stopped_converged(d.base.stop_reason);
   if (!converged) limited = "base";
-  for (const FittedModel& m : d.candidates)
-    if (!m.failed) {
+  std::vector<const FittedModel*> fitted;
+  for (const FittedModel& m : d.candidates) fitted.push_back(&m);
+  fitted.push_back(&d.finer_grid);
+  for (const FittedModel* f : fitted)
+    if (const FittedModel& m = *f; !m.failed) {
       ++models;
       if (stopped_converged(m.stop_reason)) ++converged;
       else limited += (limited.empty() ? "" : ", ") + m.name;
@@ -494,6 +562,19 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   }
   if (own_thread.joinable()) own_thread.join();
   if (own_failure) std::rethrow_exception(own_failure);
+  if (const auto f = own_fits.find(kFinerGrid); f != own_fits.end()) {
+    d.finer_grid = std::move(f->second);
+    own_fits.erase(f);
+  }
+  d.finer_grid.name = kFinerGrid;
+  if (const auto w = skipped.find(kFinerGrid); w != skipped.end()) {
+    d.finer_grid.failed = true;
+    d.finer_grid.failure = w->second;
+    skipped.erase(w);
+  } else if (!o.finer_grid) {
+    d.finer_grid.failed = true;
+    d.finer_grid.failure = "not asked for (--no-finer-grid)";
+  }
   std::vector<std::string> order = o.candidates;  // by score, the untestable ones last
   std::stable_sort(order.begin(), order.end(), [&](const std::string& a, const std::string& b) {
     const double sa = score.count(a) ? score.at(a) : -1, sb = score.count(b) ? score.at(b) : -1;

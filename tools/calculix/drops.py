@@ -404,6 +404,7 @@ def make_case(name, a):
 
 
 def main():
+    global CONTACT_K
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", help="output folder, one sub-folder per case")
     ap.add_argument("--cases", default=",".join(CASES), help="comma-separated, of: " + ", ".join(CASES))
@@ -412,6 +413,8 @@ def main():
     ap.add_argument("--dt", type=float, default=1.0 / 600, help="largest ccx time increment, s")
     ap.add_argument("--cell-size", type=float, default=0.025, help="ssc grid cell size of the scene, m")
     ap.add_argument("--contact", default="NODE TO SURFACE", help="ccx contact type")
+    ap.add_argument("--contact-stiffness", type=float, default=CONTACT_K,
+                    help="ccx's linear pressure-overclosure slope and ssc's ground.stiffness, N/m^3 (default %g)" % CONTACT_K)
     ap.add_argument("--material", choices=("neo_hookean", "linear"), default="neo_hookean",
                     help="the body's ccx material: Neo-Hookean (default), or linear elastic, which under NLGEOM "
                          "is St. Venant-Kirchhoff (the neo_hookean case is always Neo-Hookean)")
@@ -420,6 +423,7 @@ def main():
     ap.add_argument("--ssc", default=None, help="ssc binary: render the frames into OUT/CASE/obs")
     ap.add_argument("--jobs", type=int, default=os.cpu_count(), help="cases run at once (one ccx each)")
     a = ap.parse_args()
+    CONTACT_K = a.contact_stiffness
     names = a.cases.split(",")
     for name in names:
         if name not in CASES:

@@ -1,0 +1,99 @@
+// The two_materials interface's pattern search (see interface_search.h).
+#include "models/diagnosis/interface_search.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "models/cost/surface_constraint.h"
+#include "models/sim/compute_device.h"
+#include "models/sim/gradient.h"
+#include "models/sim/parameters.h"
+
+namespace ssc {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+const std::string kRegionModulus = "material.regions[0].youngs_modulus";
+
+// The held-in cost of one geometry at the best of o.moduli second moduli (one batch); the
+// best modulus goes to g.modulus.
+double score_or_throw(const FittedModel& base, InterfaceGuess& g, const DiagnosisContext& c, const InterfaceSearchOptions& o) {
+  const ModelSpec spec = two_materials_spec(g.normal, g.offset, g.modulus, "");
+  std::vector<std::string> overrides = c.overrides, fit = c.options.fit;
+  overrides.insert(overrides.end(), spec.overrides.begin(), spec.overrides.end());
+  fit.push_back(kRegionModulus);
+  const Problem p = held_in(load_problem(c.scene_path, overrides, c.observations, c.phi_max, fit), c.heldin);
+  const int n = std::max(1, o.moduli);
+  Simulation sim(p.scene, p.grid, n, true);
+  place_on(sim, c.options.device);
+  std::vector<double> moduli;
+  for (int i = 0; i < n; ++i) {
+    moduli.push_back(g.modulus * std::pow(3.0, n == 1 ? 0.0 : -1 + 2.0 * i / (n - 1)));
+    PhysicalParameters q = with_values(p.scene, base.names, base.values);
+    set_parameter(q, kRegionModulus, moduli.back());
+    sim.set_parameters(i, q);
+  }
+  GradientOptions go;
+  go.gradient = false;
+  const std::vector<CostGradient> r = evaluate_cost_gradient(sim, SurfaceConstraintCost(p.grid, p.phi_max), p.frames, go);
+  double best = std::numeric_limits<double>::infinity();
+  double at = g.modulus;
+  for (int i = 0; i < n; ++i)
+    if (std::isfinite(r[size_t(i)].cost) && r[size_t(i)].cost < best) best = r[size_t(i)].cost, at = moduli[size_t(i)];
+  g.modulus = at;
+  return best;
+}
+
+double score(const FittedModel& base, InterfaceGuess& g, const DiagnosisContext& c, const InterfaceSearchOptions& o) {
+  try {
+    return score_or_throw(base, g, c, o);
+  } catch (const std::exception&) {  // an interface outside the body, say: no geometry to take
+    return std::numeric_limits<double>::infinity();
+  }
+}
+
+}  // namespace
+
+InterfaceSearch search_interface(const FittedModel& base, const InterfaceGuess& start, const DiagnosisContext& c,
+                                 const InterfaceSearchOptions& o) {
+  InterfaceSearch s;
+  s.best = start;
+  s.heldin_cost = s.start_cost = score(base, s.best, c, o);
+  s.geometries = 1;
+  // The interface turns about its point nearest to the rest body's centre of mass.
+  const Eigen::Vector3d centre = base.problem.grid.rest_center_of_mass;
+  for (int round = 0; round < o.rounds; ++round) {
+    const double tilt = o.tilt_deg * kPi / 180 / std::pow(2.0, round);
+    const double shift = o.shift_fraction * c.extent / std::pow(2.0, round);
+    for (int moves = 0; moves < o.moves_per_round; ++moves) {
+      const Eigen::Vector3d n = s.best.normal;
+      const Eigen::Vector3d pivot = centre + (s.best.offset - n.dot(centre)) * n;
+      const Eigen::Vector3d u = n.unitOrthogonal(), v = n.cross(u);
+      std::vector<InterfaceGuess> around;
+      for (const Eigen::Vector3d& w : {u, Eigen::Vector3d(-u), v, Eigen::Vector3d(-v)}) {
+        InterfaceGuess g = s.best;
+        g.normal = (std::cos(tilt) * n + std::sin(tilt) * w).normalized();
+        g.offset = g.normal.dot(pivot);
+        around.push_back(g);
+      }
+      for (double sign : {-1.0, 1.0}) {
+        InterfaceGuess g = s.best;
+        g.offset += sign * shift;
+        around.push_back(g);
+      }
+      InterfaceGuess next = s.best;
+      double next_cost = s.heldin_cost;
+      for (InterfaceGuess& g : around) {
+        const double cost = score(base, g, c, o);
+        ++s.geometries;
+        if (cost < next_cost) next = g, next_cost = cost;
+      }
+      if (!(next_cost < s.heldin_cost)) break;
+      s.best = next, s.heldin_cost = next_cost;
+    }
+  }
+  return s;
+}
+
+}  // namespace ssc

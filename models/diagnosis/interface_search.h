@@ -1,0 +1,36 @@
+// Where the two_materials candidate's interface lies: its orientation and offset, searched
+// from the stiffness gradient's proposal (candidates.h, interface_proposal).
+//
+// A region's cells are fixed when its scene is built, so the interface's geometry cannot be a
+// parameter of the fit: each geometry is a scene of its own. The search is a pattern search
+// over the normal (tilted towards four directions across it) and the offset (moved both ways),
+// with the steps halved each round; a geometry's score is the held-in cost at the best of a
+// few second moduli around the guess, all run as one batch of simulations, with the base
+// fit's parameters. The candidate's fit then takes the best geometry found.
+#pragma once
+#include <string>
+
+#include "models/diagnosis/candidates.h"
+#include "models/diagnosis/model_fit.h"
+
+namespace ssc {
+
+struct InterfaceSearchOptions {
+  int rounds = 2;
+  double tilt_deg = 15;         // the first round's tilt of the normal
+  double shift_fraction = 1.0 / 8;  // the first round's offset step, of the body's extent
+  int moves_per_round = 3;
+  int moduli = 4;               // second moduli per geometry: modulus times 3^t, t from -1 to 1
+};
+
+struct InterfaceSearch {
+  InterfaceGuess best;       // the geometry and its best second modulus
+  double heldin_cost = 0;    // there
+  double start_cost = 0;     // at the proposal
+  int geometries = 0;        // geometries scored
+};
+
+InterfaceSearch search_interface(const FittedModel& base, const InterfaceGuess& start, const DiagnosisContext& c,
+                                 const InterfaceSearchOptions& options = {});
+
+}  // namespace ssc
