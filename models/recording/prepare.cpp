@@ -41,6 +41,17 @@ std::vector<char> mask_of(const DepthComponent& part, size_t pixels) {
 
 }  // namespace
 
+ImagePlanes find_image_planes(const DepthImage& image, const DepthIntrinsics& k, const SensorNoise& noise,
+                              double depth_scale) {
+  ImagePlanes out;
+  out.stride = std::max(1, int(std::sqrt(double(k.width) * k.height / 40000.0)));
+  out.points = pixel_points(image, k, nullptr, out.stride);
+  std::vector<double> band;
+  for (const Eigen::Vector3d& q : out.points.points) band.push_back(noise_band(noise, q.z(), depth_scale));
+  out.planes = find_planes(out.points.points, band, Eigen::Vector3d::Zero());
+  return out;
+}
+
 PreparedRecording prepare_recording(const PrepareOptions& o) {
   PreparedRecording p;
   stage(o, "reading the recording");
@@ -54,17 +65,13 @@ PreparedRecording prepare_recording(const PrepareOptions& o) {
   stage(o, "finding the planes");
   const std::vector<double> background = far_background(rec.frames, o.noise, rec.depth_scale);
   const DepthImage search_image = plane_search_image(rec, background);
-  const int stride = std::max(1, int(std::sqrt(double(k.width) * k.height / 40000.0)));
-  p.plane_stride = stride;
-  const PixelPoints bg = pixel_points(search_image, k, nullptr, stride);
-  std::vector<double> band;
-  for (const Eigen::Vector3d& q : bg.points) band.push_back(noise_band(o.noise, q.z(), rec.depth_scale));
-  const std::vector<DetectedPlane> found = find_planes(bg.points, band, Eigen::Vector3d::Zero());
-  for (const DetectedPlane& d : found) {
+  const ImagePlanes found = find_image_planes(search_image, k, o.noise, rec.depth_scale);
+  p.plane_stride = found.stride;
+  for (const DetectedPlane& d : found.planes) {
     PreparedPlane plane;
     plane.camera = d.plane;
     plane.rms = d.rms;
-    for (int i : d.inliers) plane.pixels.push_back(bg.pixels[std::size_t(i)]);
+    for (int i : d.inliers) plane.pixels.push_back(found.points.pixels[std::size_t(i)]);
     p.planes.push_back(std::move(plane));
   }
 
