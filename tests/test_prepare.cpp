@@ -52,6 +52,7 @@ PreparedSynthetic prepare_synthetic(const std::string& name, const SyntheticReco
   o.resolution = spec.resolution;
   clear_warnings();
   s.prepared = prepare_recording(o);
+  for (const Warning& w : warnings()) EXPECT_NE(w.code, "camera_moving") << w.message;
   return s;
 }
 
@@ -328,6 +329,25 @@ TEST(PrepareRealRecording, LivingRoomFramesFloorWallAndChairSeat) {
     EXPECT_NEAR(floor_heights[f], floor_heights[0], 0.01) << "frame " << f;
     EXPECT_LT((seat_centres[f] - seat_centres[0]).norm(), 0.02) << "frame " << f;
   }
+  // prepare itself, given a box of the seat's size and the seat's pixel, says that the camera moves.
+  const std::string box = scratch("livingroom") + "/box.obj";
+  {
+    std::ofstream b(box);
+    for (int i = 0; i < 8; ++i)
+      b << "v " << ((i & 1) ? 0.15 : -0.15) << " " << ((i & 2) ? 0.15 : -0.15) << " " << ((i & 4) ? 0.15 : -0.15) << "\n";
+    b << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+  }
+  PrepareOptions o;
+  o.recording_folder = folder;
+  o.recording.fps = 30;
+  o.mesh = box;
+  o.density = 100;
+  o.pick = Eigen::Vector2d(466, 261);
+  clear_warnings();
+  prepare_recording(o);
+  bool moving = false;
+  for (const Warning& w : warnings()) moving |= w.code == "camera_moving";
+  EXPECT_TRUE(moving);
 }
 
 }  // namespace

@@ -64,6 +64,21 @@ PreparedRecording prepare_recording(const PrepareOptions& o) {
 
   stage(o, "finding the planes");
   const std::vector<double> background = far_background(rec.frames, o.noise, rec.depth_scale);
+  {  // a camera at rest reads the same depth, within the noise, nearly everywhere the object is not
+    const DepthImage& first = rec.frames.front();
+    const DepthImage& last = rec.frames.back();
+    size_t both = 0, changed = 0;
+    for (size_t i = 0; i < first.depth.size(); ++i)
+      if (first.depth[i] > 0 && last.depth[i] > 0) {
+        ++both;
+        changed += std::abs(last.depth[i] - first.depth[i]) > noise_band(o.noise, first.depth[i], rec.depth_scale);
+      }
+    if (rec.frames.size() > 1 && 2 * changed > both)
+      warn("camera_moving", fmt::format("{}: {:.0f} % of the pixels read another depth in the last frame than in the "
+                                        "first: the camera seems to move, but prepare assumes a camera at rest (its "
+                                        "motion would be taken for the object's); record with the camera fixed", where,
+                                        100.0 * double(changed) / double(std::max<size_t>(both, 1))));
+  }
   const DepthImage search_image = plane_search_image(rec, background);
   const ImagePlanes found = find_image_planes(search_image, k, o.noise, rec.depth_scale);
   p.plane_stride = found.stride;
