@@ -45,7 +45,8 @@ set(SSC_TESTS_slow
   ExtensionFit.NeoHookeanYoungsModulusFromASmallerTimeStep ExtensionFit.SecondPlaneFromAFinerSimulation
   FrictionFit.ReconstructRecoversMuFromAFinerSimulation
   NeoHookean.LargeDeflectionCantileverAgainstCalculix
-  PrepareCli.PrepareThenReconstructRecoversYoungsModulus MpiRanks.ReconstructOnTwoRanksGivesTheOneProcessResult
+  PrepareCli.PrepareThenReconstructRecoversYoungsModulus PrepareCli.CalculixDropPreparedThenFittedSlow
+  MpiRanks.ReconstructOnTwoRanksGivesTheOneProcessResult
   NvrtcCompile.AllExampleKernelsDoubleAndFloat)
 
 set(SSC_TESTS_gpu

@@ -41,6 +41,17 @@ std::vector<char> mask_of(const DepthComponent& part, size_t pixels) {
 
 }  // namespace
 
+ImagePlanes find_image_planes(const DepthImage& image, const DepthIntrinsics& k, const SensorNoise& noise,
+                              double depth_scale) {
+  ImagePlanes out;
+  out.stride = std::max(1, int(std::sqrt(double(k.width) * k.height / 40000.0)));
+  out.points = pixel_points(image, k, nullptr, out.stride);
+  std::vector<double> band;
+  for (const Eigen::Vector3d& q : out.points.points) band.push_back(noise_band(noise, q.z(), depth_scale));
+  out.planes = find_planes(out.points.points, band, Eigen::Vector3d::Zero());
+  return out;
+}
+
 PreparedRecording prepare_recording(const PrepareOptions& o) {
   PreparedRecording p;
   stage(o, "reading the recording");
@@ -53,18 +64,29 @@ PreparedRecording prepare_recording(const PrepareOptions& o) {
 
   stage(o, "finding the planes");
   const std::vector<double> background = far_background(rec.frames, o.noise, rec.depth_scale);
+  {  // a camera at rest reads the same depth, within the noise, nearly everywhere the object is not
+    const DepthImage& first = rec.frames.front();
+    const DepthImage& last = rec.frames.back();
+    size_t both = 0, changed = 0;
+    for (size_t i = 0; i < first.depth.size(); ++i)
+      if (first.depth[i] > 0 && last.depth[i] > 0) {
+        ++both;
+        changed += std::abs(last.depth[i] - first.depth[i]) > noise_band(o.noise, first.depth[i], rec.depth_scale);
+      }
+    if (rec.frames.size() > 1 && 2 * changed > both)
+      warn("camera_moving", fmt::format("{}: {:.0f} % of the pixels read another depth in the last frame than in the "
+                                        "first: the camera seems to move, but prepare assumes a camera at rest (its "
+                                        "motion would be taken for the object's); record with the camera fixed", where,
+                                        100.0 * double(changed) / double(std::max<size_t>(both, 1))));
+  }
   const DepthImage search_image = plane_search_image(rec, background);
-  const int stride = std::max(1, int(std::sqrt(double(k.width) * k.height / 40000.0)));
-  p.plane_stride = stride;
-  const PixelPoints bg = pixel_points(search_image, k, nullptr, stride);
-  std::vector<double> band;
-  for (const Eigen::Vector3d& q : bg.points) band.push_back(noise_band(o.noise, q.z(), rec.depth_scale));
-  const std::vector<DetectedPlane> found = find_planes(bg.points, band, Eigen::Vector3d::Zero());
-  for (const DetectedPlane& d : found) {
+  const ImagePlanes found = find_image_planes(search_image, k, o.noise, rec.depth_scale);
+  p.plane_stride = found.stride;
+  for (const DetectedPlane& d : found.planes) {
     PreparedPlane plane;
     plane.camera = d.plane;
     plane.rms = d.rms;
-    for (int i : d.inliers) plane.pixels.push_back(bg.pixels[std::size_t(i)]);
+    for (int i : d.inliers) plane.pixels.push_back(found.points.pixels[std::size_t(i)]);
     p.planes.push_back(std::move(plane));
   }
 

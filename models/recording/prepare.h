@@ -88,6 +88,17 @@ struct PreparedRecording {
 
 PreparedRecording prepare_recording(const PrepareOptions& options);
 
+// Step 2's plane search in one depth image: RANSAC (plane_fit.h) over every stride-th pixel
+// (about 40,000 points in all), each point's inlier band the sensor noise at its depth. Planes
+// in the camera's frame, largest first, normals towards the camera.
+struct ImagePlanes {
+  std::vector<DetectedPlane> planes;
+  PixelPoints points;  // the points searched; DetectedPlane::inliers index them
+  int stride = 1;
+};
+ImagePlanes find_image_planes(const DepthImage& image, const DepthIntrinsics& k, const SensorNoise& noise,
+                              double depth_scale);
+
 // The name the scan gets in the output folder: "scan" with the scan's extension (lower case).
 std::string scan_file_name(const std::string& mesh);
 
