@@ -79,6 +79,7 @@ template <class Real>
 SSC_HD inline void element_stiffness_apply(const Real* w, Real lambda, Real mu, Real h,
                                            const Vec3<Real>* q, Vec3<Real>* y) {
   for (int c = 0; c < 8; ++c) y[c] = zero3<Real>();
+  SSC_UNROLL  // corner indices known at compile time: y stays in registers
   for (int v = 0; v < 8; ++v) {
     if (w[v] == Real(0)) continue;
     const Vec3<Real> qn[3] = {q[v ^ 1], q[v ^ 2], q[v ^ 4]};

@@ -5,10 +5,13 @@
 // containers and no exceptions; every function is SSC_HD and templated on Real.
 #pragma once
 
+// SSC_UNROLL: unroll the loop that follows whole (a loop over a cell's 8 corners).
 #if defined(__CUDACC__) || defined(__CUDACC_RTC__)
 #define SSC_HD __host__ __device__
+#define SSC_UNROLL _Pragma("unroll")
 #else
 #define SSC_HD
+#define SSC_UNROLL _Pragma("GCC unroll 8")
 #endif
 
 #ifndef __CUDACC_RTC__

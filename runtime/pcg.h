@@ -11,6 +11,7 @@
 // break the iteration with 0/0, and it adds nothing a double (or float) gradient can hold.
 #pragma once
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -30,27 +31,40 @@ struct PcgResult {
   bool converged = false;
 };
 
-// Summed in blocks of kBlock, blocks added in order: the same bits serial or parallel.
-template <class Real>
-double deterministic_dot(const Real* a, const Real* b, long n) {
+// N sums over i < n of what body(i, acc) adds into acc[0..N): summed in blocks of kBlock,
+// blocks added in order, so the same bits serial or parallel. A loop that updates vectors
+// can sum their products in the same pass.
+template <int N, class Body>
+std::array<double, N> blocked_sums(long n, Body&& body) {
   constexpr long kBlock = 2048;
   const long blocks = (n + kBlock - 1) / kBlock;
-  auto block_sum = [&](long k) {
-    double s = 0;
+  auto block_sum = [&](long k, double* acc) {
+    for (int j = 0; j < N; ++j) acc[j] = 0;
     const long end = std::min(n, (k + 1) * kBlock);
-    for (long i = k * kBlock; i < end; ++i) s += double(a[i]) * double(b[i]);
-    return s;
+    for (long i = k * kBlock; i < end; ++i) body(i, acc);
   };
-  double total = 0;
+  std::array<double, N> total{};
+  auto add = [&](const double* acc) {
+    for (int j = 0; j < N; ++j) total[j] += acc[j];
+  };
   if (n < kParallelThreshold) {
-    for (long k = 0; k < blocks; ++k) total += block_sum(k);
+    double acc[N];
+    for (long k = 0; k < blocks; ++k) {
+      block_sum(k, acc);
+      add(acc);
+    }
     return total;
   }
-  std::vector<double> partial(blocks, 0.0);
+  std::vector<double> partial(size_t(blocks) * N, 0.0);
 #pragma omp parallel for schedule(static)
-  for (long k = 0; k < blocks; ++k) partial[k] = block_sum(k);
-  for (double p : partial) total += p;
+  for (long k = 0; k < blocks; ++k) block_sum(k, partial.data() + k * N);
+  for (long k = 0; k < blocks; ++k) add(partial.data() + k * N);
   return total;
+}
+
+template <class Real>
+double deterministic_dot(const Real* a, const Real* b, long n) {
+  return blocked_sums<1>(n, [&](long i, double* acc) { acc[0] += double(a[i]) * double(b[i]); })[0];
 }
 
 template <class Real>
@@ -72,14 +86,16 @@ PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b,
     return result;
   }
   apply(x, q.data());
-#pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
-  for (long i = 0; i < n; ++i) {
+  // r = b - A x, z = M^-1 r, p = z; r.z and |r|^2 in the same pass.
+  auto start = blocked_sums<2>(n, [&](long i, double* acc) {
     r[i] = b[i] - q[i];
     z[i] = inv_diag[i] * r[i];
     p[i] = z[i];
-  }
-  double rz = deterministic_dot(r.data(), z.data(), n);
-  double r_norm = std::sqrt(deterministic_dot(r.data(), r.data(), n));
+    acc[0] += double(r[i]) * double(z[i]);
+    acc[1] += double(r[i]) * double(r[i]);
+  });
+  double rz = start[0];
+  double r_norm = std::sqrt(start[1]);
   const double scale = std::max(b_norm, reference);
   while (true) {
     result.relative_residual = r_norm / scale;
@@ -91,18 +107,19 @@ PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b,
     apply(p.data(), q.data());
     const double pq = deterministic_dot(p.data(), q.data(), n);
     const Real step = Real(rz / pq);
-#pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
-    for (long i = 0; i < n; ++i) {
+    // x += step p, r -= step q, z = M^-1 r; the new r.z and |r|^2 in the same pass.
+    const auto sums = blocked_sums<2>(n, [&](long i, double* acc) {
       x[i] += step * p[i];
       r[i] -= step * q[i];
       z[i] = inv_diag[i] * r[i];
-    }
-    const double rz_next = deterministic_dot(r.data(), z.data(), n);
-    const Real beta = Real(rz_next / rz);
-    rz = rz_next;
+      acc[0] += double(r[i]) * double(z[i]);
+      acc[1] += double(r[i]) * double(r[i]);
+    });
+    const Real beta = Real(sums[0] / rz);
+    rz = sums[0];
 #pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
     for (long i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
-    r_norm = std::sqrt(deterministic_dot(r.data(), r.data(), n));
+    r_norm = std::sqrt(sums[1]);
     ++result.iterations;
   }
 }
