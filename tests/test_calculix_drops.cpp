@@ -114,8 +114,9 @@ TEST_F(CalculixDropsFit, CostIsLowestAtTheTrueYoungsModulus) {
   EXPECT_NEAR(vertex, 5e4, 2500) << "ssc's cost on the CalculiX drop is lowest at E = " << vertex << " Pa";
 }
 
-// The discretization control of `ssc diagnose` on data no ssc simulation made: the base
-// model refitted on a grid of half the cell size, its cost with the base's phi_max. At ccx's
+// The discretization controls of `ssc diagnose` on data no ssc simulation made: the base model
+// refitted on a grid of half the cell size (its cost with the base's phi_max) and on half the
+// time step. At ccx's
 // true modulus the finer grid's residual is about half the 25 mm grid's (docs/diagnosis.md),
 // so it must fit the held-out frames better than the base and find ccx's modulus. (On the
 // whole 22-frame drop a stiffness gradient removed 57 % of the held-out residual and was named
@@ -130,16 +131,23 @@ TEST_F(CalculixDropsFit, DiagnoseFitsTheDiscretizationControlOnHalfTheCellSize) 
             0)
       << out << err;
   const json d = read_json(diag / "diagnosis.json");
-  const json& control = d.at("finer_grid");
+  ASSERT_EQ(d.at("discretization_controls").size(), 2u);
+  const json& control = d.at("discretization_controls")[0];
+  EXPECT_EQ(control.at("name"), "finer_grid");
   ASSERT_TRUE(control.at("fitted").get<bool>()) << control.dump();
-  EXPECT_EQ(control.at("grid"), "grid.cell_size 0.0125 m");
+  EXPECT_EQ(control.at("what"), "a grid of half the cell size, grid.cell_size 0.0125 m");
+  const json& step = d.at("discretization_controls")[1];
+  EXPECT_EQ(step.at("name"), "finer_step");
+  EXPECT_TRUE(step.at("fitted").get<bool>()) << step.dump();
   const double E = control.at("parameters").at("youngs_modulus").get<double>();
   EXPECT_NEAR(E, 5e4, 5e3) << "the finer grid's fit of ccx's 50 kPa";
   EXPECT_LT(control.at("heldout_cost").get<double>(), d.at("base").at("heldout_cost").get<double>());
   EXPECT_GT(control.at("gain").get<double>(), 0.2);
   EXPECT_EQ(d.at("cause"), "none");  // ccx's incline is frictionless
   for (const json& c : d.at("candidates"))
-    if (c.at("name") == "friction") EXPECT_DOUBLE_EQ(c.at("finer_grid_gain").get<double>(), control.at("gain").get<double>());
+    if (c.at("name") == "friction")
+      EXPECT_DOUBLE_EQ(c.at("discretization_gain").get<double>(),
+                       std::max(control.at("gain").get<double>(), step.at("gain").get<double>()));
 }
 
 }  // namespace

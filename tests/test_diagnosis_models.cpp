@@ -1,5 +1,5 @@
-// The diagnosis's models that are not extensions: the discretization control's spec
-// (models/diagnosis/candidates.h, finer_grid_spec) and the two-material spec the interface
+// The diagnosis's models that are not extensions: the discretization controls' specs
+// (models/diagnosis/candidates.h) and the two-material spec the interface
 // search fits.
 #include <gtest/gtest.h>
 
@@ -33,6 +33,20 @@ TEST(DiagnosisModels, TheFinerGridHalvesTheCellAndKeepsTheBandInMetres) {
   scene.cell_size = -20;  // grid.resolution 20
   spec = finer_grid_spec(scene, &skipped);
   EXPECT_TRUE(has(spec.overrides, "grid.resolution=40"));
+}
+
+TEST(DiagnosisModels, TheFinerStepHalvesTheTimeStepOverTheSameDuration) {
+  Scene scene;
+  scene.time.dt = 0.01;
+  scene.time.steps = 80;
+  std::string skipped;
+  const ModelSpec spec = discretization_spec("finer_step", scene, &skipped);
+  EXPECT_EQ(skipped, "");
+  EXPECT_EQ(spec.name, "finer_step");
+  EXPECT_TRUE(has(spec.overrides, "time.dt=0.005"));
+  EXPECT_TRUE(has(spec.overrides, "time.steps=160"));
+  EXPECT_TRUE(spec.extra.empty());
+  EXPECT_EQ(discretization_controls(), (std::vector<std::string>{"finer_grid", "finer_step"}));
 }
 
 TEST(DiagnosisModels, AGridThatCannotBeRefinedIsSkippedWithTheReason) {

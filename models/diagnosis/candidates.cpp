@@ -202,14 +202,30 @@ ModelSpec two_materials_spec(const Eigen::Vector3d& normal, double offset, doubl
   return spec;
 }
 
+const std::vector<std::string>& discretization_controls() {
+  static const std::vector<std::string> names = {"finer_grid", "finer_step"};
+  return names;
+}
+
+ModelSpec discretization_spec(const std::string& control, const Scene& scene, std::string* skipped) {
+  return control == "finer_step" ? finer_step_spec(scene) : finer_grid_spec(scene, skipped);
+}
+
+ModelSpec finer_step_spec(const Scene& scene) {
+  ModelSpec spec{"finer_step"};
+  spec.overrides = {fmt::format("time.dt={}", scene.time.dt / 2), fmt::format("time.steps={}", 2 * scene.time.steps)};
+  spec.note = fmt::format("half the time step, time.dt {:g} s", scene.time.dt / 2);
+  return spec;
+}
+
 ModelSpec finer_grid_spec(const Scene& scene, std::string* skipped) {
   ModelSpec spec{"finer_grid"};
   if (scene.cell_size > 0) {
     spec.overrides.push_back(fmt::format("grid.cell_size={}", scene.cell_size / 2));
-    spec.note = fmt::format("grid.cell_size {:g} m", scene.cell_size / 2);
+    spec.note = fmt::format("a grid of half the cell size, grid.cell_size {:g} m", scene.cell_size / 2);
   } else if (scene.cell_size < 0 && -2 * scene.cell_size <= 300) {
     spec.overrides.push_back(fmt::format("grid.resolution={}", int(-2 * scene.cell_size)));
-    spec.note = fmt::format("grid.resolution {}", int(-2 * scene.cell_size));
+    spec.note = fmt::format("a grid of half the cell size, grid.resolution {}", int(-2 * scene.cell_size));
   } else {
     *skipped = scene.cell_size == 0 ? "the body's grid is its sdf_file's and cannot be refined"
                                     : "grid.resolution is already above 150 cells";

@@ -47,10 +47,16 @@ InterfaceGuess interface_proposal(const FittedModel& gradient_fit, const Problem
 // to has its own Young's modulus, started within 3 times `modulus` of it).
 ModelSpec two_materials_spec(const Eigen::Vector3d& normal, double offset, double modulus, const std::string& note);
 
-// The discretization control: the base model on a grid of half the cell size (twice the
-// resolution), no parameter of its own. What it removes of the held-out residual is the
-// model's own discretization, which no physical candidate stands for. Empty `name` (and why
-// in `skipped`) where the grid cannot be refined: an sdf_file body's grid is the file's.
+// The discretization controls: the base model on a finer discretization, no parameter of its
+// own. What one removes of the held-out residual is the model's own discretization error,
+// which no physical candidate stands for:
+//   finer_grid  a grid of half the cell size (twice the resolution; the same band in metres);
+//               not for an sdf_file body, whose grid is the file's
+//   finer_step  half the time step (twice the steps)
+const std::vector<std::string>& discretization_controls();
+// Empty `name` (and why in `skipped`) where the discretization cannot be refined.
+ModelSpec discretization_spec(const std::string& control, const Scene& scene, std::string* skipped);
 ModelSpec finer_grid_spec(const Scene& scene, std::string* skipped);
+ModelSpec finer_step_spec(const Scene& scene);
 
 }  // namespace ssc

@@ -159,14 +159,17 @@ FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const Diagnosis
   return std::move(fits[best]);
 }
 
-// The name of the discretization control among the fits of step 3.
-const std::string kFinerGrid = "finer_grid";
+bool is_control(const std::string& name) {
+  const std::vector<std::string>& c = discretization_controls();
+  return std::find(c.begin(), c.end(), name) != c.end();
+}
 
-// Step 3 for the discretization control: the base model on a grid of half the cell size,
-// started from the base's fit. Its cost keeps the base's phi_max (by default two of the
-// base's cells): with its own, every point far from the body would cost a quarter as much.
-FittedModel fit_finer_grid(const Diagnosis& d, const DiagnosisContext& c, const Scene& scene, std::string* skipped) {
-  const ModelSpec spec = finer_grid_spec(scene, skipped);
+// Step 3 for a discretization control: the base model on a finer discretization, started from
+// the base's fit. Its cost keeps the base's phi_max (by default two of the base's cells): on a
+// finer grid's own, every point far from the body would cost a quarter as much.
+FittedModel fit_control(const std::string& control, const Diagnosis& d, const DiagnosisContext& c, const Scene& scene,
+                        std::string* skipped) {
+  const ModelSpec spec = discretization_spec(control, scene, skipped);
   if (!skipped->empty()) return FittedModel{};
   DiagnosisContext same_cost = c;
   same_cost.phi_max = d.base.problem.phi_max;
@@ -181,7 +184,7 @@ FittedModel fit_finer_grid(const Diagnosis& d, const DiagnosisContext& c, const 
 constexpr int kFitsPerGpu = 2;
 
 // Step 3 for every candidate the shared batch did not fit, in `order`, and the
-// discretization control (kFinerGrid) where asked for. On the GPU (with one rank) the fits run
+// discretization controls where asked for. On the GPU (with one rank) the fits run
 // side by side, kFitsPerGpu threads per GPU, each taking the next one; a fit's result does not
 // depend on which GPU ran it or what ran beside it. A skipped fit's reason goes to `skipped`.
 std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const DiagnosisContext& c, const Scene& scene,
@@ -191,17 +194,18 @@ std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const Diagnos
                                                std::map<std::string, std::string>& skipped,
                                                const std::function<void(const std::string&)>& say) {
   std::vector<std::string> names;
-  if (c.options.finer_grid) names.push_back(kFinerGrid);  // the costliest first
+  if (c.options.discretization_controls)  // the costliest first
+    for (const std::string& control : discretization_controls()) names.push_back(control);
   for (const std::string& name : order)
     if (!shared_fits.count(name) && !skipped.count(name)) names.push_back(name);
   std::vector<FittedModel> fits(names.size());
   std::vector<std::string> why(names.size());
   auto fit = [&](size_t k, const DiagnosisContext& on) {
-    say("fitting " + (names[k] == kFinerGrid ? "the base model on a grid of half the cell size" : names[k]) +
+    say("fitting " + (is_control(names[k]) ? "the base model, " + names[k] : names[k]) +
         (on.options.device == c.options.device ? "" : " on " + on.options.device));
     try {
-      fits[k] = names[k] == kFinerGrid
-                    ? fit_finer_grid(d, on, scene, &why[k])
+      fits[k] = is_control(names[k])
+                    ? fit_control(names[k], d, on, scene, &why[k])
                     : fit_own(*find_extension(names[k]), d, on, scene, shared_fits, base_starts, &why[k]);
     } catch (const std::exception& e) {
       fits[k].failed = true;
@@ -265,10 +269,13 @@ std::vector<std::string> implausible_values(const FittedModel& m, double extent)
 // plausibility and its event.
 void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) {
   const DiagnosisOptions& o = c.options;
-  if (!d.finer_grid.failed && !d.finer_grid.frame_costs.empty()) {
-    const Gain g = cost_gain(d.base.frame_costs, d.finer_grid.frame_costs, d.heldin_frames, -1, o.bootstrap, o.seed + 57);
-    d.finer_grid_gain = g.value, d.finer_grid_gain_low = g.low, d.finer_grid_gain_high = g.high;
-  }
+  double discretization = 0;
+  for (Diagnosis::Control& k : d.controls)
+    if (!k.fit.failed && !k.fit.frame_costs.empty()) {
+      const Gain g = cost_gain(d.base.frame_costs, k.fit.frame_costs, d.heldin_frames, -1, o.bootstrap, o.seed + 57);
+      k.gain = g.value, k.gain_low = g.low, k.gain_high = g.high;
+      discretization = std::max(discretization, g.value);
+    }
   const size_t most = d.placebos.empty() ? 0 : d.placebos.back().extra.size();
   auto placebo_gain = [&](size_t extra) {
     if (extra == 0) return 0.0;
@@ -291,9 +298,9 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
     const Gain g = cost_gain(d.base.frame_costs, m.frame_costs, d.heldin_frames, -1, o.bootstrap, o.seed + i);
     v.gain = g.value, v.gain_low = g.low, v.gain_high = g.high;
     v.placebo_gain = std::max(0.0, placebo_gain(extra));
-    v.finer_grid_gain = std::max(0.0, d.finer_grid_gain);
+    v.discretization_gain = discretization;
     v.implausible = implausible_values(m, c.extent);
-    v.passes = v.gain >= o.min_gain && v.gain_low > std::max(v.placebo_gain, v.finer_grid_gain) + o.margin &&
+    v.passes = v.gain >= o.min_gain && v.gain_low > std::max(v.placebo_gain, v.discretization_gain) + o.margin &&
                v.implausible.empty();
     if (v.passes) named.push_back(i);
     try {
@@ -412,7 +419,7 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
         best = i;
     d.lines.push_back(fmt::format("cause: none. No candidate removes {} of the held-out residual and beats its placebo "
                                   "{}by {} points{}",
-                                  percent(o.min_gain), d.finer_grid.failed ? "" : "and the discretization control ",
+                                  percent(o.min_gain), d.controls.empty() ? "" : "and the discretization controls ",
                                   100 * o.margin,
                                   best < d.verdicts.size()
                                       ? fmt::format(" (the best, {}, removes {}, interval {} .. {})", d.verdicts[best].name,
@@ -441,19 +448,21 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
     }
     if (!m.proposal.empty()) d.lines.push_back("proposed from the data: " + m.proposal);
   }
-  const std::string finer = fmt::format("the base model on a grid of half the cell size ({}) removes {}",
-                                        d.finer_grid.proposal, percent(d.finer_grid_gain));
-  for (size_t i = 0; i < d.verdicts.size(); ++i) {
+  const Diagnosis::Control* finest = nullptr;  // the control with the largest gain
+  for (const Diagnosis::Control& k : d.controls)
+    if (!k.fit.failed && (!finest || k.gain > finest->gain)) finest = &k;
+  for (size_t i = 0; i < d.verdicts.size() && finest; ++i) {
     const CandidateVerdict& v = d.verdicts[i];
     if (!v.passes && v.implausible.empty() && v.gain >= o.min_gain && v.gain_low > v.placebo_gain + o.margin)
-      d.lines.push_back(fmt::format("{} would remove {} of the held-out residual but is not named: {}, so the "
-                                    "model's own discretization can explain as much",
-                                    v.name, percent(v.gain), finer));
+      d.lines.push_back(fmt::format("{} would remove {} of the held-out residual but is not named: the base model with "
+                                    "{} removes {}, so the model's own discretization can explain as much",
+                                    v.name, percent(v.gain), finest->fit.proposal, percent(finest->gain)));
   }
-  if (!d.finer_grid.failed && d.finer_grid_gain >= o.min_gain)
-    d.lines.push_back(fmt::format("discretization: {} of the held-out residual; a finer grid.cell_size fits closer "
-                                  "(fitted there: {})",
-                                  finer, values_text(d.finer_grid)));
+  for (const Diagnosis::Control& k : d.controls)
+    if (!k.fit.failed && k.gain >= o.min_gain)
+      d.lines.push_back(fmt::format("discretization: the base model with {} removes {} of the held-out residual; it "
+                                    "fits closer there (fitted: {})",
+                                    k.fit.proposal, percent(k.gain), values_text(k.fit)));
   for (size_t i = 0; i < d.verdicts.size(); ++i)
     if (!d.verdicts[i].implausible.empty() && d.verdicts[i].gain >= o.min_gain)
       d.lines.push_back(fmt::format("{} would remove {} of the held-out residual but is not named: its fit needs {}",
@@ -504,7 +513,7 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
   if (!converged) limited = "base";
   std::vector<const FittedModel*> fitted;
   for (const FittedModel& m : d.candidates) fitted.push_back(&m);
-  fitted.push_back(&d.finer_grid);
+  for (const Diagnosis::Control& k : d.controls) fitted.push_back(&k.fit);
   for (const FittedModel* f : fitted)
     if (const FittedModel& m = *f; !m.failed) {
       ++models;
@@ -562,19 +571,21 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   }
   if (own_thread.joinable()) own_thread.join();
   if (own_failure) std::rethrow_exception(own_failure);
-  if (const auto f = own_fits.find(kFinerGrid); f != own_fits.end()) {
-    d.finer_grid = std::move(f->second);
-    own_fits.erase(f);
-  }
-  d.finer_grid.name = kFinerGrid;
-  if (const auto w = skipped.find(kFinerGrid); w != skipped.end()) {
-    d.finer_grid.failed = true;
-    d.finer_grid.failure = w->second;
-    skipped.erase(w);
-  } else if (!o.finer_grid) {
-    d.finer_grid.failed = true;
-    d.finer_grid.failure = "not asked for (--no-finer-grid)";
-  }
+  if (o.discretization_controls)
+    for (const std::string& control : discretization_controls()) {
+      Diagnosis::Control k;
+      if (const auto f = own_fits.find(control); f != own_fits.end()) {
+        k.fit = std::move(f->second);
+        own_fits.erase(f);
+      }
+      k.fit.name = control;
+      if (const auto w = skipped.find(control); w != skipped.end()) {
+        k.fit.failed = true;
+        k.fit.failure = w->second;
+        skipped.erase(w);
+      }
+      d.controls.push_back(std::move(k));
+    }
   std::vector<std::string> order = o.candidates;  // by score, the untestable ones last
   std::stable_sort(order.begin(), order.end(), [&](const std::string& a, const std::string& b) {
     const double sa = score.count(a) ? score.at(a) : -1, sb = score.count(b) ? score.at(b) : -1;

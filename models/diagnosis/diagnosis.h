@@ -17,8 +17,9 @@
 //   held_out.h         the gain on the held-out frames with a bootstrap interval; the event
 //   identifiability.h  which parameters trade one for the other at the cause's fit
 // A candidate is named when its held-out gain is at least `min_gain`, its interval's lower end
-// beats by `margin` both its placebo's gain and the discretization control's (the base model
-// on a grid of half the cell size: what the model's own discretization explains), and its fit stays inside every plausible range (a fit
+// beats by `margin` both its placebo's gain and the discretization controls' (the base model
+// on half the cell size and on half the time step: what the model's own discretization
+// explains), and its fit stays inside every plausible range (a fit
 // at a range's end needs a value no physical object has: reported, not named); the cause is
 // the named candidate with the largest gain, or "none". Two named candidates whose gains differ
 // by less than their difference's interval are reported as confounded. A candidate that fits
@@ -47,7 +48,7 @@ struct CandidateVerdict {
   std::string name;
   double gain = 0, gain_low = 0, gain_high = 0;  // fraction of the base's held-out cost removed
   double placebo_gain = 0;
-  double finer_grid_gain = 0;  // the discretization control's gain, the other bar it must beat
+  double discretization_gain = 0;  // the largest discretization control's gain, the other bar it must beat
   double score = std::numeric_limits<double>::quiet_NaN();  // predicted relative held-in decrease
   bool passes = false;
   // The frames after the event the extension is about (the first contact with any plane; with
@@ -69,10 +70,13 @@ struct Diagnosis {
   FittedModel base;
   std::vector<FittedModel> candidates, placebos;  // a placebo per count of extra parameters (1..3) a candidate has
   std::vector<CandidateVerdict> verdicts;         // one per candidate, in the order fitted
-  // The discretization control (the base on a grid of half the cell size): failed with the
-  // reason where it was not run.
-  FittedModel finer_grid;
-  double finer_grid_gain = 0, finer_grid_gain_low = 0, finer_grid_gain_high = 0;
+  // The discretization controls (the base on half the cell size, on half the time step), in
+  // the order of discretization_controls(): failed with the reason where not run.
+  struct Control {
+    FittedModel fit;
+    double gain = 0, gain_low = 0, gain_high = 0;
+  };
+  std::vector<Control> controls;
   std::string cause = "none";
   std::vector<std::pair<std::string, std::string>> confounded;
   ParameterCorrelation identifiability;  // at the cause's fit (empty names: not assessed)

@@ -42,7 +42,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
       c["gain_low"] = v.gain_low;
       c["gain_high"] = v.gain_high;
       c["placebo_gain"] = v.placebo_gain;
-      c["finer_grid_gain"] = v.finer_grid_gain;
+      c["discretization_gain"] = v.discretization_gain;
       c["passes"] = v.passes;
       c["extra_parameters"] = named(m, true, &base);
       nlohmann::json before = nlohmann::json::object(), after = nlohmann::json::object();
@@ -75,20 +75,24 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                         {"parameters", named(p, true, &base)},
                         {"heldout_cost", p.failed ? nlohmann::json(nullptr) : nlohmann::json(p.heldout_cost)}});
   j["placebos"] = placebos;
-  nlohmann::json finer{{"fitted", !d.finer_grid.failed}};
-  if (d.finer_grid.failed) {
-    finer["why_not"] = d.finer_grid.failure;
-  } else {
-    finer["grid"] = d.finer_grid.proposal;
-    finer["parameters"] = named(d.finer_grid, false, nullptr);
-    finer["heldout_cost"] = d.finer_grid.heldout_cost;
-    finer["gain"] = d.finer_grid_gain;
-    finer["gain_low"] = d.finer_grid_gain_low;
-    finer["gain_high"] = d.finer_grid_gain_high;
-    finer["convergence"] = convergence(d.finer_grid);
-    finer["seconds"] = d.finer_grid.seconds;
+  nlohmann::json controls = nlohmann::json::array();
+  for (const Diagnosis::Control& k : d.controls) {
+    nlohmann::json c{{"name", k.fit.name}, {"fitted", !k.fit.failed}};
+    if (k.fit.failed) {
+      c["why_not"] = k.fit.failure;
+    } else {
+      c["what"] = k.fit.proposal;
+      c["parameters"] = named(k.fit, false, nullptr);
+      c["heldout_cost"] = k.fit.heldout_cost;
+      c["gain"] = k.gain;
+      c["gain_low"] = k.gain_low;
+      c["gain_high"] = k.gain_high;
+      c["convergence"] = convergence(k.fit);
+      c["seconds"] = k.fit.seconds;
+    }
+    controls.push_back(c);
   }
-  j["finer_grid"] = finer;
+  j["discretization_controls"] = controls;
   j["undecided"] = nlohmann::json::array();
   for (const auto& [candidate, what] : d.undecided) j["undecided"].push_back({{"candidate", candidate}, {"base", what}});
   j["confounded"] = nlohmann::json::array();

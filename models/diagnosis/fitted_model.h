@@ -22,9 +22,9 @@ struct DiagnosisOptions {
   double min_gain = 0.2;    // of the base model's held-out cost
   double margin = 0.05;     // over the placebo's gain
   int bootstrap = 2000;
-  // The discretization control: the base refitted on a grid of half the cell size; a
-  // candidate must also beat its gain (candidates.h, finer_grid_spec).
-  bool finer_grid = true;
+  // The discretization controls: the base refitted on half the cell size and on half the time
+  // step; a candidate must also beat their gains (candidates.h, discretization_controls).
+  bool discretization_controls = true;
 };
 
 // One fitted model (the base, a candidate or a placebo).

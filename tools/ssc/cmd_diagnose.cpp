@@ -133,9 +133,10 @@ Command register_diagnose(CLI::App& app) {
   sub->add_option("--seed", o->d.seed, "Seed of the starts and the bootstrap");
   sub->add_option("--phi-max", o->phi_max, "Cost threshold in metres");
   sub->add_option("--set", o->overrides, "Override a scene key: dotted.key=JSON, repeatable");
-  sub->add_flag("--no-finer-grid", "Skip the discretization control (the base model refitted on a grid of half the "
-                "cell size, a bar every candidate must beat)")
-      ->each([o](const std::string&) { o->d.finer_grid = false; });
+  sub->add_flag("--no-discretization-controls",
+                "Skip the discretization controls (the base model refitted on half the cell size and on half the "
+                "time step, bars every candidate must beat)")
+      ->each([o](const std::string&) { o->d.discretization_controls = false; });
   add_device_option(sub, &o->device, true);
   add_progress_options(sub, &o->progress);
   return [o] {
