@@ -5,10 +5,12 @@
 // containers and no exceptions; every function is SSC_HD and templated on Real.
 #pragma once
 
-// SSC_UNROLL: unroll the loop that follows whole (a loop over a cell's 8 corners).
+// SSC_UNROLL: unroll the loop that follows whole (a loop over a cell's 8 corners) on the host.
+// Not on the GPU: there it slowed the diagnosis timing case's shared batch from 40.8 to 68.7 s
+// (one H200; docs/benchmarks.md, "Several GPUs").
 #if defined(__CUDACC__) || defined(__CUDACC_RTC__)
 #define SSC_HD __host__ __device__
-#define SSC_UNROLL _Pragma("unroll")
+#define SSC_UNROLL
 #else
 #define SSC_HD
 #define SSC_UNROLL _Pragma("GCC unroll 8")
