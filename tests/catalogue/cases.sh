@@ -270,6 +270,8 @@ def diagnose.holdout-held-in 2 '--holdout 0.99 && 2 of the 5 && at least 3' 'dia
   'obs; fixture ball.json' 'ssc diagnose ball.json --observations obs --holdout 0.99 --starts 1 --iterations 1 --out out'
 def diagnose.fit-candidate 2 '--fit ground.friction && candidate of the diagnosis' 'diagnose --fit ground.friction while friction is a candidate' \
   'obs; fixture ball.json' 'ssc diagnose ball.json --observations obs --fit youngs_modulus,ground.friction --holdout 0.5 --starts 1 --iterations 1 --out out'
+def diagnose.iteration-limit 0 'friction: the fit stopped at the iteration limit' 'diagnose --iterations 1: the fits that stopped at the iteration limit are printed, not only kept in diagnosis.json' \
+  'obs; fixture ball.json' 'ssc diagnose ball.json --observations obs --holdout 0.4 --candidates friction --starts 1 --iterations 1 --out out' writes
 def probe.syntax 2 '--probe' '--probe with two numbers' \
   'fixture ball.json' 'ssc simulate ball.json --out out --probe 0,0.15'
 def probe.outside 2 'probe' '--probe point outside the body' \
