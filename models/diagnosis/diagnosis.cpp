@@ -265,7 +265,7 @@ std::vector<std::string> implausible_values(const FittedModel& m, double extent)
   return out;
 }
 
-// Step 4: each candidate's gain against its placebo and the discretization control, its
+// Step 4: each candidate's gain against its placebo and the discretization controls, its
 // plausibility and its event.
 void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) {
   const DiagnosisOptions& o = c.options;
