@@ -30,6 +30,8 @@ namespace {
 constexpr int kPlaneProposals = 3;
 // A base parameter that moves by more than this fraction once a candidate is modelled is reported.
 constexpr double kBaseChange = 0.1;
+// Seconds between two progress lines from within the fits.
+constexpr double kRoundLines = 10;
 // A fit within this fraction of a plausible range's end (of its logarithm for a range over
 // more than two decades) sits at the end.
 constexpr double kAtEnd = 0.01;
@@ -539,7 +541,15 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   };
   Diagnosis d;
   Scene scene;
-  const DiagnosisContext c = prepare(d, scene_path, overrides, observations, phi_max, o, &scene);
+  DiagnosisContext c = prepare(d, scene_path, overrides, observations, phi_max, o, &scene);
+  // Within the fits, a line at most every kRoundLines seconds: a diagnosis on the CPU runs for minutes.
+  auto last_round = std::chrono::steady_clock::now();
+  c.round_progress = [&](const std::string& s) {
+    std::lock_guard<std::mutex> lock(saying);
+    if (!progress || seconds_since(last_round) < kRoundLines) return;
+    last_round = std::chrono::steady_clock::now();
+    progress(s);
+  };
 
   std::vector<std::map<std::string, double>> base_starts;
   Problem shared_problem;

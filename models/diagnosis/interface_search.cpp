@@ -45,10 +45,24 @@ double score_or_throw(const FittedModel& base, InterfaceGuess& g, const Diagnosi
   return best;
 }
 
+// Whether the interface leaves cells of the body on both sides (the base's grid is every
+// geometry's: the same body and cell size).
+bool splits_body(const SimGrid& grid, const InterfaceGuess& g) {
+  MaterialRegion region;
+  region.normal = g.normal;
+  region.offset = g.offset;
+  int inside = 0;
+  for (int e = 0; e < grid.cell_count; ++e)
+    inside += region.contains(Eigen::Vector3d(grid.cell_center[3 * e], grid.cell_center[3 * e + 1], grid.cell_center[3 * e + 2]));
+  return inside > 0 && inside < grid.cell_count;
+}
+
+// +infinity for a geometry that is no interface (one side empty) or whose simulation fails.
 double score(const FittedModel& base, InterfaceGuess& g, const DiagnosisContext& c, const InterfaceSearchOptions& o) {
+  if (!splits_body(base.problem.grid, g)) return std::numeric_limits<double>::infinity();
   try {
     return score_or_throw(base, g, c, o);
-  } catch (const std::exception&) {  // an interface outside the body, say: no geometry to take
+  } catch (const std::exception&) {
     return std::numeric_limits<double>::infinity();
   }
 }

@@ -157,7 +157,16 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
       ro.start_free.push_back(free);
     }
   }
-  const ReconstructionResult r = reconstruct(held_in(shared, c.heldin), ro);
+  ReconstructionProgress told;
+  if (c.round_progress) {
+    const std::string fits = specs.size() == 1 ? specs[0].name
+                                               : fmt::format("{} and {} more", specs[0].name, specs.size() - 1);
+    told = [&c, fits, iterations = o.iterations](int round, int active, double best, const Eigen::VectorXd&) {
+      c.round_progress(fmt::format("{}: round {} of at most {}, {} starts going on, best held-in cost {:.4g}", fits, round,
+                                   iterations, active, best));
+    };
+  }
+  const ReconstructionResult r = reconstruct(held_in(shared, c.heldin), ro, told);
   const double batch_seconds = seconds_since(t0);
 
   std::vector<FittedModel> models;

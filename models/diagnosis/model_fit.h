@@ -28,6 +28,9 @@ struct DiagnosisContext {
   DiagnosisOptions options;
   int heldin = 0;      // held-in frames
   double extent = 1;   // the rest body's largest extent, m
+  // Told after every optimiser round of a fit ("base, placebo_3, friction: round 4 of 30, ...");
+  // called from the fits' threads; may be empty.
+  std::function<void(const std::string& what)> round_progress;
 };
 
 struct ModelSpec {
