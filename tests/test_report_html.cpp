@@ -81,6 +81,10 @@ json synthetic_report() {
          {"base_before", {{"youngs_modulus", 117000}}}, {"base_after", {{"youngs_modulus", 98000}}},
          {"warnings", {"the 90 % interval includes 0"}}}}},
       {"confounded", json::array({json::array({"air_drag", "mass_damping"})})},
+      {"discretization_controls",
+       {{{"name", "finer_grid"}, {"fitted", true}, {"what", "a grid of half the cell size, grid.cell_size 0.025 m"},
+         {"parameters", {{"youngs_modulus", 51000}}}, {"gain", 0.21}, {"gain_low", 0.15}, {"gain_high", 0.27}},
+        {{"name", "finer_step"}, {"fitted", false}, {"why_not", "the fit failed: <&>"}}}},
       {"parameters", {{"units", {{"youngs_modulus", "Pa"}, {"ground.friction", "1"}}},
                       {"base", {{"youngs_modulus", 117000}}},
                       {"winner", {{"youngs_modulus", 52000}, {"ground.friction", 0.31}}}}},
@@ -126,6 +130,8 @@ TEST(ReportHtml, RendersEverySectionAndFigureOfASyntheticReport) {
   EXPECT_EQ(count_of(html, "<&>"), 0u);
   EXPECT_NE(html.find("Most likely missing effect: friction"), std::string::npos);
   EXPECT_NE(html.find("indistinguishable with this data"), std::string::npos);
+  EXPECT_NE(html.find("a grid of half the cell size, grid.cell_size 0.025 m"), std::string::npos);
+  EXPECT_NE(html.find("not fitted: the fit failed: &lt;&amp;&gt;"), std::string::npos);
   EXPECT_NE(html.find("camera cam, frame 12, t = 0.6 s"), std::string::npos);
   for (const char* text : {"time [s]", "RMS residual [mm]", "held-out frames", ">contact<", "residual [mm]", "no observed point"})
     EXPECT_NE(html.find(text), std::string::npos) << text;

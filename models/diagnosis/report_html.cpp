@@ -294,6 +294,23 @@ std::string candidates_html(const json& data) {
     }
     html += "</table>\n";
   }
+  const json& controls = member(data, "discretization_controls");
+  if (has_items(controls) && controls.is_array()) {
+    html += "<p>Discretization controls: the base model on a finer discretization. What one removes is the model's own "
+            "discretization error; a candidate must beat the larger gain as it must beat the placebo's.</p>\n"
+            "<table class=\"controls\">\n<tr><th>control</th><th>what</th><th>fitted parameters</th>"
+            "<th>gain [90 % interval]</th></tr>\n";
+    for (const json& k : controls) {
+      const bool fitted = member(k, "fitted").is_boolean() && member(k, "fitted").get<bool>();
+      html += fitted ? fmt::format("<tr><td>{}</td><td>{}</td><td>{}</td><td class=\"num\">{} [{}, {}]</td></tr>\n",
+                                   format_value(member(k, "name")), format_value(member(k, "what")),
+                                   format_assignments(member(k, "parameters")), format_percent(number_at(k, "gain")),
+                                   format_percent(number_at(k, "gain_low")), format_percent(number_at(k, "gain_high")))
+                     : fmt::format("<tr><td>{}</td><td colspan=\"3\">not fitted: {}</td></tr>\n",
+                                   format_value(member(k, "name")), format_value(member(k, "why_not")));
+    }
+    html += "</table>\n";
+  }
   const json& confounded = member(data, "confounded");
   if (has_items(confounded) && confounded.is_array()) {
     html += "<ul class=\"confounded\">\n";

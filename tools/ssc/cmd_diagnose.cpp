@@ -58,6 +58,7 @@ nlohmann::json report_data(const Diagnosis& d, const nlohmann::json& dj, const s
   data["provenance"] = {{"scene", scene}, {"observations", observations}, {"device", device}};
   data["candidates"] = dj["candidates"];
   data["confounded"] = dj["confounded"];
+  data["discretization_controls"] = dj["discretization_controls"];
   nlohmann::json units = nlohmann::json::object(), base = dj["base"]["parameters"], winner = nlohmann::json::object();
   for (const auto& [name, value] : base.items()) units[name] = parameter_or_measurement_unit(name);
   for (const FittedModel& m : d.candidates)
