@@ -125,7 +125,7 @@ TEST_F(CalculixDropsFit, DiagnoseFitsTheDiscretizationControlOnHalfTheCellSize) 
   std::string out, err;
   const fs::path diag = dir_ / "diag";
   ASSERT_EQ(run("diagnose '" + kCase + "/scene.json' --observations '" + kCase +
-                    "/obs' --candidates friction --starts 1 --iterations 6 --device cpu --quiet --out '" +
+                    "/obs' --candidates friction --starts 1 --iterations 4 --device cpu --quiet --out '" +
                     diag.string() + "'",
                 &out, &err),
             0)
