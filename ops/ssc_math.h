@@ -6,8 +6,9 @@
 #pragma once
 
 // SSC_UNROLL: unroll the loop that follows whole (a loop over a cell's 8 corners) on the host.
-// Not on the GPU: there it slowed the diagnosis timing case's shared batch from 40.8 to 68.7 s
-// (one H200; docs/benchmarks.md, "Several GPUs").
+// Not on the GPU: with it the diagnosis timing case's shared batch took 68.7 s on one H200
+// (--gpus 1 on a two-GPU machine), against 40.8 s before and 40.7 s after on one-GPU H200
+// machines (docs/benchmarks.md, "Several GPUs").
 #if defined(__CUDACC__) || defined(__CUDACC_RTC__)
 #define SSC_HD __host__ __device__
 #define SSC_UNROLL

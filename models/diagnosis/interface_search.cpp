@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "models/cost/surface_constraint.h"
+#include "models/sim/body.h"
 #include "models/sim/compute_device.h"
 #include "models/sim/gradient.h"
 #include "models/sim/parameters.h"
@@ -16,37 +17,17 @@ namespace {
 constexpr double kPi = 3.14159265358979323846;
 const std::string kRegionModulus = "material.regions[0].youngs_modulus";
 
-// The held-in cost of one geometry at the best of o.moduli second moduli (one batch); the
-// best modulus goes to g.modulus.
-double score_or_throw(const FittedModel& base, InterfaceGuess& g, const DiagnosisContext& c, const InterfaceSearchOptions& o) {
-  const ModelSpec spec = two_materials_spec(g.normal, g.offset, g.modulus, "");
+// The held-in problem with a two-material body, loaded once (the observations are read once);
+// each geometry only reassigns the region's cells (models/sim/body.h).
+Problem two_material_problem(const InterfaceGuess& start, const DiagnosisContext& c) {
+  const ModelSpec spec = two_materials_spec(start.normal, start.offset, start.modulus, "");
   std::vector<std::string> overrides = c.overrides, fit = c.options.fit;
   overrides.insert(overrides.end(), spec.overrides.begin(), spec.overrides.end());
   fit.push_back(kRegionModulus);
-  const Problem p = held_in(load_problem(c.scene_path, overrides, c.observations, c.phi_max, fit), c.heldin);
-  const int n = std::max(1, o.moduli);
-  Simulation sim(p.scene, p.grid, n, true);
-  place_on(sim, c.options.device);
-  std::vector<double> moduli;
-  for (int i = 0; i < n; ++i) {
-    moduli.push_back(g.modulus * std::pow(3.0, n == 1 ? 0.0 : -1 + 2.0 * i / (n - 1)));
-    PhysicalParameters q = with_values(p.scene, base.names, base.values);
-    set_parameter(q, kRegionModulus, moduli.back());
-    sim.set_parameters(i, q);
-  }
-  GradientOptions go;
-  go.gradient = false;
-  const std::vector<CostGradient> r = evaluate_cost_gradient(sim, SurfaceConstraintCost(p.grid, p.phi_max), p.frames, go);
-  double best = std::numeric_limits<double>::infinity();
-  double at = g.modulus;
-  for (int i = 0; i < n; ++i)
-    if (std::isfinite(r[size_t(i)].cost) && r[size_t(i)].cost < best) best = r[size_t(i)].cost, at = moduli[size_t(i)];
-  g.modulus = at;
-  return best;
+  return held_in(load_problem(c.scene_path, overrides, c.observations, c.phi_max, fit), c.heldin);
 }
 
-// Whether the interface leaves cells of the body on both sides (the base's grid is every
-// geometry's: the same body and cell size).
+// Whether the interface leaves cells of the body on both sides.
 bool splits_body(const SimGrid& grid, const InterfaceGuess& g) {
   MaterialRegion region;
   region.normal = g.normal;
@@ -57,11 +38,36 @@ bool splits_body(const SimGrid& grid, const InterfaceGuess& g) {
   return inside > 0 && inside < grid.cell_count;
 }
 
-// +infinity for a geometry that is no interface (one side empty) or whose simulation fails.
-double score(const FittedModel& base, InterfaceGuess& g, const DiagnosisContext& c, const InterfaceSearchOptions& o) {
-  if (!splits_body(base.problem.grid, g)) return std::numeric_limits<double>::infinity();
+// The held-in cost of one geometry at the best of o.moduli second moduli (one batch); the
+// best modulus goes to g.modulus. +infinity for a geometry that is no interface (one side
+// empty) or whose simulation fails.
+double score(Problem& p, const FittedModel& base, InterfaceGuess& g, const DiagnosisContext& c,
+             const InterfaceSearchOptions& o) {
+  if (!splits_body(p.grid, g)) return std::numeric_limits<double>::infinity();
+  MaterialRegion& region = p.scene.material.regions[0];
+  region.normal = g.normal;
+  region.offset = g.offset;
+  assign_material_regions(p.scene, p.grid);
   try {
-    return score_or_throw(base, g, c, o);
+    const int n = std::max(1, o.moduli);
+    Simulation sim(p.scene, p.grid, n, true);
+    place_on(sim, c.options.device);
+    std::vector<double> moduli;
+    for (int i = 0; i < n; ++i) {
+      moduli.push_back(g.modulus * std::pow(3.0, n == 1 ? 0.0 : -1 + 2.0 * i / (n - 1)));
+      PhysicalParameters q = with_values(p.scene, base.names, base.values);
+      set_parameter(q, kRegionModulus, moduli.back());
+      sim.set_parameters(i, q);
+    }
+    GradientOptions go;
+    go.gradient = false;
+    const std::vector<CostGradient> r = evaluate_cost_gradient(sim, SurfaceConstraintCost(p.grid, p.phi_max), p.frames, go);
+    double best = std::numeric_limits<double>::infinity();
+    double at = g.modulus;
+    for (int i = 0; i < n; ++i)
+      if (std::isfinite(r[size_t(i)].cost) && r[size_t(i)].cost < best) best = r[size_t(i)].cost, at = moduli[size_t(i)];
+    g.modulus = at;
+    return best;
   } catch (const std::exception&) {
     return std::numeric_limits<double>::infinity();
   }
@@ -73,7 +79,8 @@ InterfaceSearch search_interface(const FittedModel& base, const InterfaceGuess& 
                                  const InterfaceSearchOptions& o) {
   InterfaceSearch s;
   s.best = start;
-  s.heldin_cost = s.start_cost = score(base, s.best, c, o);
+  Problem p = two_material_problem(start, c);
+  s.heldin_cost = s.start_cost = score(p, base, s.best, c, o);
   s.geometries = 1;
   // The interface turns about its point nearest to the rest body's centre of mass.
   const Eigen::Vector3d centre = base.problem.grid.rest_center_of_mass;
@@ -99,7 +106,7 @@ InterfaceSearch search_interface(const FittedModel& base, const InterfaceGuess& 
       InterfaceGuess next = s.best;
       double next_cost = s.heldin_cost;
       for (InterfaceGuess& g : around) {
-        const double cost = score(base, g, c, o);
+        const double cost = score(p, base, g, c, o);
         ++s.geometries;
         if (cost < next_cost) next = g, next_cost = cost;
       }

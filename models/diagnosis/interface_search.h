@@ -1,8 +1,9 @@
 // Where the two_materials candidate's interface lies: its orientation and offset, searched
 // from the stiffness gradient's proposal (candidates.h, interface_proposal).
 //
-// A region's cells are fixed when its scene is built, so the interface's geometry cannot be a
-// parameter of the fit: each geometry is a scene of its own. The search is a pattern search
+// A region's cells are fixed when its grid is built, so the interface's geometry cannot be a
+// parameter of the fit: the problem is loaded once and each geometry reassigns the region's
+// cells (models/sim/body.h). The search is a pattern search
 // over the normal (tilted towards four directions across it) and the offset (moved both ways),
 // with the steps halved each round; a geometry's score is the held-in cost at the best of a
 // few second moduli around the guess, all run as one batch of simulations, with the base
