@@ -62,7 +62,7 @@ DiagnosisContext prepare(Diagnosis& d, const std::string& scene_path, const std:
     if (!find_extension(name))
       throw InputError(fmt::format("--candidates: unknown candidate '{}'; known: {}", name, extension_list()));
   if (!(o.holdout > 0 && o.holdout < 1)) throw InputError("--holdout must be in (0, 1)");
-  DiagnosisContext c{scene_path, overrides, observations, phi_max, o, 0, 1};
+  DiagnosisContext c{scene_path, overrides, observations, phi_max, o, 0, 1, {}};
   const Problem probe = load_problem(scene_path, overrides, observations, phi_max, o.fit);
   const int n = int(probe.frames.size());
   d.heldin_frames = std::max(2, int(std::ceil((1 - o.holdout) * n)));
@@ -106,6 +106,7 @@ std::map<std::string, FittedModel> fit_shared(Diagnosis& d, const DiagnosisConte
   say(fmt::format("fitting the base model with {} as one batch of {} starts", together,
                   specs.size() * size_t(c.options.starts)));
   std::vector<FittedModel> fitted = fit_together(specs, c, base_starts, &shared_problem);
+  say(fmt::format("the batch of the base model with {} done", together));
   d.base = std::move(fitted[0]);
   if (d.base.failed) throw SimulationError("the base model's fit failed at every start: " + d.base.failure);
   for (size_t k = 0; k < placebos; ++k) d.placebos.push_back(std::move(fitted[1 + k]));
@@ -213,6 +214,7 @@ std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const Diagnos
       fits[k].failed = true;
       fits[k].failure = e.what();
     }
+    say((is_control(names[k]) ? "the base model, " + names[k] : names[k]) + " done");
   };
   std::vector<int> gpus;  // a fit's thread each, on its GPU: kFitsPerGpu per GPU (SSC_FITS_PER_GPU=N: N)
   if (runs_on_gpu(c.options.device) && ranks::count() == 1) {
@@ -289,6 +291,16 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
       }
     return 0.0;
   };
+  std::vector<int> events(d.candidates.size(), -1);  // side by side: each simulates every frame
+  std::vector<std::string> event_failures(d.candidates.size());
+  side_by_side(d.candidates.size(), o.device, [&](size_t i, const std::string& device) {
+    if (d.candidates[i].failed) return;
+    try {
+      events[i] = event_frame(d.candidates[i], device);
+    } catch (const std::exception& e) {
+      event_failures[i] = e.what();
+    }
+  });
   for (size_t i = 0; i < d.candidates.size(); ++i) {
     FittedModel& m = d.candidates[i];
     CandidateVerdict& v = d.verdicts[i];
@@ -305,11 +317,8 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
     v.passes = v.gain >= o.min_gain && v.gain_low > std::max(v.placebo_gain, v.discretization_gain) + o.margin &&
                v.implausible.empty();
     if (v.passes) named.push_back(i);
-    try {
-      v.event_frame = event_frame(m, o.device);
-    } catch (const std::exception& e) {
-      v.warnings.push_back(std::string("the event's frame was not found: ") + e.what());
-    }
+    v.event_frame = events[i];
+    if (!event_failures[i].empty()) v.warnings.push_back("the event's frame was not found: " + event_failures[i]);
     if (v.event_frame >= 0 && v.event_frame < d.heldin_frames) {
       const auto [rss_base, n] = residual_sum(d.base.frame_costs, m.problem, v.event_frame, d.heldin_frames);
       const double rss = residual_sum(m.frame_costs, m.problem, v.event_frame, d.heldin_frames).first;
@@ -623,10 +632,12 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   }
 
   std::vector<size_t> named;
+  say("judging the candidates");
   judge(d, c, named);
   find_undecided(d, c);
   if (!named.empty()) {
     const FittedModel& m = d.candidates[named[0]];
+    say("identifiability at the " + m.name + " fit");
     try {
       identifiability_at(d, m, shared_fits.count(m.name) ? &shared_problem : nullptr, c);
     } catch (const std::exception& e) {

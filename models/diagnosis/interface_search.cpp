@@ -42,7 +42,7 @@ bool splits_body(const SimGrid& grid, const InterfaceGuess& g) {
 // best modulus goes to g.modulus. +infinity for a geometry that is no interface (one side
 // empty) or whose simulation fails.
 double score(Problem& p, const FittedModel& base, InterfaceGuess& g, const DiagnosisContext& c,
-             const InterfaceSearchOptions& o) {
+             const InterfaceSearchOptions& o, const std::string& device) {
   if (!splits_body(p.grid, g)) return std::numeric_limits<double>::infinity();
   MaterialRegion& region = p.scene.material.regions[0];
   region.normal = g.normal;
@@ -51,7 +51,7 @@ double score(Problem& p, const FittedModel& base, InterfaceGuess& g, const Diagn
   try {
     const int n = std::max(1, o.moduli);
     Simulation sim(p.scene, p.grid, n, true);
-    place_on(sim, c.options.device);
+    place_on(sim, device);
     std::vector<double> moduli;
     for (int i = 0; i < n; ++i) {
       moduli.push_back(g.modulus * std::pow(3.0, n == 1 ? 0.0 : -1 + 2.0 * i / (n - 1)));
@@ -80,7 +80,7 @@ InterfaceSearch search_interface(const FittedModel& base, const InterfaceGuess& 
   InterfaceSearch s;
   s.best = start;
   Problem p = two_material_problem(start, c);
-  s.heldin_cost = s.start_cost = score(p, base, s.best, c, o);
+  s.heldin_cost = s.start_cost = score(p, base, s.best, c, o, c.options.device);
   s.geometries = 1;
   // The interface turns about its point nearest to the rest body's centre of mass.
   const Eigen::Vector3d centre = base.problem.grid.rest_center_of_mass;
@@ -105,10 +105,14 @@ InterfaceSearch search_interface(const FittedModel& base, const InterfaceGuess& 
       }
       InterfaceGuess next = s.best;
       double next_cost = s.heldin_cost;
-      for (InterfaceGuess& g : around) {
-        const double cost = score(p, base, g, c, o);
+      std::vector<double> costs(around.size());  // side by side on GPUs, each on its copy of the problem
+      side_by_side(around.size(), c.options.device, [&](size_t k, const std::string& device) {
+        Problem own = p;
+        costs[k] = score(own, base, around[k], c, o, device);
+      });
+      for (size_t k = 0; k < around.size(); ++k) {
         ++s.geometries;
-        if (cost < next_cost) next = g, next_cost = cost;
+        if (costs[k] < next_cost) next = around[k], next_cost = costs[k];
       }
       if (!(next_cost < s.heldin_cost)) break;
       s.best = next, s.heldin_cost = next_cost;

@@ -169,11 +169,12 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
   const ReconstructionResult r = reconstruct(held_in(shared, c.heldin), ro, told);
   const double batch_seconds = seconds_since(t0);
 
-  std::vector<FittedModel> models;
+  std::vector<FittedModel> models(specs.size());
   const size_t S = base_starts.size();
-  for (size_t m = 0; m < specs.size(); ++m) {
+  // Each model's own problem and its cost over every frame, at its best start; side by side on GPUs.
+  auto evaluate = [&](size_t m, const std::string& device) {
     const ModelSpec& spec = specs[m];
-    FittedModel fm;
+    FittedModel& fm = models[m];
     fm.name = spec.name;
     fm.extra = spec.extra;
     fm.names = model_names[m];
@@ -193,8 +194,7 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
     if (best < 0) {
       fm.failed = true;
       fm.failure = r.starts[m * S].failure.empty() ? "no start" : r.starts[m * S].failure;
-      models.push_back(std::move(fm));
-      continue;
+      return;
     }
     const StartRecord& start = r.starts[size_t(best)];
     fm.values.resize(Eigen::Index(fm.names.size()));
@@ -205,11 +205,11 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
     if (start.stop_reason == "iteration limit")
       fm.note = fmt::format("the fit stopped at the iteration limit ({} iterations)", o.iterations);
     for (size_t i = 0; i < fm.names.size(); ++i) set_parameter(held, fm.names[i], fm.values[Eigen::Index(i)]);
-    fm.frame_costs = per_frame_costs(fm.problem, held, o.device);
+    fm.frame_costs = per_frame_costs(fm.problem, held, device);
     for (size_t f = 0; f < fm.frame_costs.size(); ++f)
       (int(f) < c.heldin ? fm.heldin_cost : fm.heldout_cost) += fm.frame_costs[f];
-    models.push_back(std::move(fm));
-  }
+  };
+  side_by_side(specs.size(), o.device, evaluate);
   if (shared_problem) *shared_problem = std::move(shared);
   return models;
 }

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cstdlib>
+#include <exception>
+#include <thread>
 
 #include "models/sim/simulation.h"
 #include "runtime/cuda_runtime.h"
@@ -42,6 +44,27 @@ std::vector<int> device_gpus(const std::string& device) {
   for (int g = me; g < n; g += ranks) mine.push_back(g);
   if (mine.empty()) mine.push_back(me % n);
   return mine;
+}
+
+void side_by_side(size_t count, const std::string& device, const std::function<void(size_t, const std::string&)>& fn) {
+  const std::vector<int> gpus = runs_on_gpu(device) && ranks::count() == 1 ? device_gpus(device) : std::vector<int>{};
+  if (gpus.empty() || count <= 1) {
+    for (size_t k = 0; k < count; ++k) fn(k, device);
+    return;
+  }
+  std::vector<std::exception_ptr> failures(count);
+  std::vector<std::thread> workers;
+  for (size_t k = 0; k < count; ++k)
+    workers.emplace_back([&, k] {
+      try {
+        fn(k, gpu_device(gpus[k % gpus.size()]));
+      } catch (...) {
+        failures[k] = std::current_exception();
+      }
+    });
+  for (std::thread& w : workers) w.join();
+  for (const std::exception_ptr& f : failures)
+    if (f) std::rethrow_exception(f);
 }
 
 std::string describe_device(const std::string& device) {

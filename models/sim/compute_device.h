@@ -6,6 +6,7 @@
 // host, every local_count-th of those from the rank's local rank (a rank keeps one GPU at
 // least, shared round robin where there are more ranks than GPUs).
 #pragma once
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,11 @@ void set_gpu_limit(int n);
 // "cpu", "NVIDIA H100 80GB HBM3 (sm_90)", "2 x NVIDIA H100 80GB HBM3 (sm_90) (GPUs 0, 1)", with
 // ", MPI rank R of K" where several ranks share the run (each rank names its own GPUs).
 std::string describe_device(const std::string& device);
+// fn(k, device of k) for every k < count. On the GPU with one rank, each k in a thread of its
+// own, on the device's GPUs round robin; otherwise one after another on `device`. Every call
+// finishes before the first exception thrown is rethrown. For independent evaluations whose
+// results do not depend on the GPU that computes them.
+void side_by_side(size_t count, const std::string& device, const std::function<void(size_t, const std::string&)>& fn);
 // The simulation on the device's first GPU, or left on the CPU.
 void place_on(Simulation& sim, const std::string& device, const std::string& real = "double");
 

@@ -203,6 +203,8 @@ def run_case(c, a):
     r = run([a.ssc, "diagnose", fit, "--observations", obs, "--out", os.path.join(d, "diag"),
              "--starts", str(a.starts), "--iterations", str(a.iterations), "--device", a.device] + a.diagnose_args.split())
     wall = time.time() - t0
+    with open(os.path.join(d, "diagnose.log"), "w") as log:  # its progress lines carry the elapsed time
+        log.write(r.stdout + r.stderr)
     if r.returncode:
         print(f"{c['name']}: diagnose failed: {r.stderr.strip()[-300:]}", flush=True)
         return {"name": c["name"], "effect": c["effect"], "strength": c["strength"], "cause": "failed", "seconds": wall}
