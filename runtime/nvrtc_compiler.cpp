@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "codegen/sha256.h"
+#include "runtime/cubin_resources.h"
 
 #ifdef SSC_HAVE_NVRTC
 #include <nvrtc.h>
@@ -107,7 +108,7 @@ void publish(const fs::path& p, const std::string& data) {
 }
 
 nlohmann::json resources_json(const KernelResources& r) {
-  return {{"known", r.known},           {"registers", r.registers},
+  return {{"known", r.known},           {"from_cubin", r.from_cubin}, {"registers", r.registers},
           {"shared_bytes", r.shared_bytes}, {"stack_bytes", r.stack_bytes},
           {"spill_store_bytes", r.spill_store_bytes}, {"spill_load_bytes", r.spill_load_bytes}};
 }
@@ -146,6 +147,7 @@ CompiledKernel compile_kernel(const std::string& name, const std::string& source
           k.log = j.value("log", "");
           const auto& r = j.at("resources");
           k.resources.known = r.at("known");
+          k.resources.from_cubin = r.value("from_cubin", false);
           k.resources.registers = r.at("registers");
           k.resources.shared_bytes = r.at("shared_bytes");
           k.resources.stack_bytes = r.at("stack_bytes");
@@ -214,6 +216,11 @@ CompiledKernel compile_kernel(const std::string& name, const std::string& source
       throw NvrtcError(fmt::format("NVRTC rejected the options for kernel {} (arch {}):\n{}", name, o.arch, k.log));
   }
   k.resources = parse_ptxas_log(k.log, name);
+  if (const CubinResources c = k.is_cubin && !k.resources.known ? cubin_resources(k.image, name) : CubinResources{}; c.found) {
+    k.resources.known = k.resources.from_cubin = true;
+    k.resources.registers = c.registers;
+    k.resources.shared_bytes = c.shared_bytes;
+  }
   k.compile_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   if (const char* d = std::getenv("SSC_DUMP_KERNELS"); d && *d && !k.log.empty())
     std::ofstream(fs::path(d) / (name + ".log")) << k.log;

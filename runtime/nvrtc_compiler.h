@@ -5,8 +5,9 @@
 // fast math; --fmad=false on request (tests compare with the CPU interpreter, built with
 // -ffp-contract=off). When NVRTC cannot emit CUBIN for the arch, PTX for compute_XX is
 // the fallback (the driver JITs it on load). Registers, shared memory and spills come
-// from ptxas' verbose log (no GPU needed); the CUDA runtime refines them with
-// cuFuncGetAttribute when a device exists.
+// from ptxas' verbose log (no GPU needed), or where NVRTC left that out, registers and
+// shared memory from the CUBIN (runtime/cubin_resources.h); the CUDA runtime refines them
+// with cuFuncGetAttribute when a device exists.
 //
 // Cache: $SSC_KERNEL_CACHE, else $XDG_CACHE_HOME/ssc/kernels/v1, else
 // ~/.cache/ssc/kernels/v1; files <key>.cubin (or .ptx), <key>.json (name, resources,
@@ -30,6 +31,7 @@ struct NvrtcOptions {
 
 struct KernelResources {
   bool known = false;
+  bool from_cubin = false;  // ptxas' report was missing: registers and shared memory from the CUBIN, stack and spills unknown
   int registers = 0, shared_bytes = 0, stack_bytes = 0, spill_store_bytes = 0, spill_load_bytes = 0;
 };
 

@@ -26,6 +26,7 @@
 #include "models/sim/simulation.h"
 #include "models/sim/timestep_graph.h"
 #include "runtime/cuda_runtime.h"
+#include "runtime/cubin_resources.h"
 #include "runtime/nvrtc_compiler.h"
 #include "tests/gpu_test_support.h"
 
@@ -165,16 +166,23 @@ TEST(NvrtcCompile, AllExampleKernelsDoubleAndFloat) {
     const auto compiled = compile_kernels(sources, test_options());
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ASSERT_EQ(compiled.size(), sources.size());
-    int fresh = 0, max_regs = 0;
+    int fresh = 0, max_regs = 0, checked = 0;
     for (const CompiledKernel& k : compiled) {
       EXPECT_FALSE(k.image.empty()) << k.name;
       EXPECT_TRUE(k.is_cubin) << k.name << ": fell back to PTX";
       EXPECT_TRUE(k.resources.known) << k.name << " log: " << k.log;
+      if (k.resources.known && !k.resources.from_cubin) {  // the CUBIN's reading agrees with ptxas' report
+        const CubinResources c = cubin_resources(k.image, k.name);
+        EXPECT_TRUE(c.found) << k.name;
+        EXPECT_EQ(c.registers, k.resources.registers) << k.name;
+        EXPECT_EQ(c.shared_bytes, k.resources.shared_bytes) << k.name;
+        ++checked;
+      }
       fresh += !k.from_cache;
       max_regs = std::max(max_regs, k.resources.registers);
     }
-    std::printf("[ %s ] %zu kernels, %d compiled, %.2f s wall, max %d registers\n", real, compiled.size(), fresh, s,
-                max_regs);
+    std::printf("[ %s ] %zu kernels, %d compiled, %.2f s wall, max %d registers; %d read from the CUBIN as ptxas "
+                "reported\n", real, compiled.size(), fresh, s, max_regs, checked);
     RecordProperty(std::string("compile_seconds_") + real, std::to_string(s));
   }
 }
@@ -233,6 +241,15 @@ TEST(NvrtcCompile, PtxasLogParsing) {
   EXPECT_EQ(r.spill_store_bytes, 8);
   EXPECT_EQ(r.spill_load_bytes, 4);
   EXPECT_EQ(parse_ptxas_log(log, "k2").registers, 12);
+}
+
+TEST(NvrtcCompile, CubinReaderRefusesWhatIsNoCubin) {
+  EXPECT_FALSE(cubin_resources("", "k").found);
+  EXPECT_FALSE(cubin_resources("// PTX\n.version 9.0\n", "k").found);
+  std::string elf(64, '\0');  // an ELF64 header whose section table lies beyond the file
+  elf.replace(0, 6, "\x7f" "ELF\x02\x01");
+  elf[0x28] = '\x7f', elf[0x3A] = 64, elf[0x3C] = 4, elf[0x3E] = 1;
+  EXPECT_FALSE(cubin_resources(elf, "k").found);
 }
 
 }  // namespace

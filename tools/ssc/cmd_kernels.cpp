@@ -88,8 +88,10 @@ int run_kernels(const KernelsOptions& o) {
   for (const CompiledKernel& k : compiled) {
     const KernelResources& r = k.resources;
     cached += k.from_cache;
-    table += fmt::format("{:<58} {:>5} {:>6} {:>6} {:>7} {:>7} {:>9}\n", k.name, r.registers, r.shared_bytes, r.stack_bytes,
-                         r.spill_store_bytes, r.spill_load_bytes, k.from_cache ? "cached" : fmt::format("{:.0f} ms", k.compile_ms));
+    auto shown = [&](int v) { return r.known && !r.from_cubin ? std::to_string(v) : std::string("-"); };  // "-": not known
+    table += fmt::format("{:<58} {:>5} {:>6} {:>6} {:>7} {:>7} {:>9}\n", k.name, r.known ? std::to_string(r.registers) : "-",
+                         r.known ? std::to_string(r.shared_bytes) : "-", shown(r.stack_bytes), shown(r.spill_store_bytes),
+                         shown(r.spill_load_bytes), k.from_cache ? "cached" : fmt::format("{:.0f} ms", k.compile_ms));
   }
   write_text_file(out.file("resources.txt"), table);
   std::printf("\n%s", table.c_str());
