@@ -1,0 +1,221 @@
+// How many CG iterations a time step's Newmark solve needs under other preconditioners than
+// the engine's Jacobi (issue 27: the step is ~95 % CG iterations). Reads systems written by
+// SSC_DUMP_NEWMARK_SYSTEM (runtime/solvers.cpp), assembles them as sparse matrices and runs
+// PCG from the engine's initial guess to the engine's tolerance (||r|| <= tol ||b||) with:
+//   - Jacobi (the engine's; its count must match the engine's report for the step),
+//   - geometric multigrid V(nu, nu) cycles on the cell grid: coarse nodes every 2^l cells,
+//     trilinear prolongation P, Galerkin coarse matrices P^T A P, damped Jacobi smoothing and
+//     a direct solve on the coarsest level.
+// Each line gives the iterations and their cost in fine-grid operator applications (a CG
+// iteration 1, a V-cycle 2 nu + 1 on the finest level plus an eighth of that per level below).
+// Usage: ssc_preconditioner_study FILE... [--tol 1e-6]
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+#include <vector>
+
+namespace {
+
+using Sparse = Eigen::SparseMatrix<double>;
+using Vector = Eigen::VectorXd;
+
+struct System {
+  int nodes = 0;
+  double h = 0;
+  std::vector<double> rest;  // 3 per node
+  Vector rhs, guess;
+  std::vector<bool> fixed;  // per dof
+  Sparse A;
+};
+
+System read_system(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + path);
+  auto get = [&](void* data, size_t bytes) {
+    in.read(static_cast<char*>(data), std::streamsize(bytes));
+    if (!in) throw std::runtime_error(path + ": truncated");
+  };
+  std::int64_t header[3];
+  get(header, sizeof header);
+  System s;
+  s.nodes = int(header[0]);
+  const long n = 3L * s.nodes, nnz = long(header[1]);
+  get(&s.h, sizeof s.h);
+  s.rest.resize(size_t(n));
+  get(s.rest.data(), s.rest.size() * sizeof(double));
+  s.rhs.resize(n), s.guess.resize(n), s.fixed.resize(size_t(n));
+  for (long i = 0; i < n; ++i) {
+    double v[3];
+    get(v, sizeof v);
+    s.rhs[i] = v[2] != 0 ? 0 : v[0], s.guess[i] = v[2] != 0 ? 0 : v[1], s.fixed[size_t(i)] = v[2] != 0;
+  }
+  std::vector<std::int64_t> rows(static_cast<size_t>(nnz)), cols(static_cast<size_t>(nnz));
+  std::vector<double> values(static_cast<size_t>(nnz));
+  get(rows.data(), rows.size() * sizeof(std::int64_t));
+  get(cols.data(), cols.size() * sizeof(std::int64_t));
+  get(values.data(), values.size() * sizeof(double));
+  std::vector<Eigen::Triplet<double>> t;
+  t.reserve(size_t(nnz));
+  for (long k = 0; k < nnz; ++k) t.emplace_back(int(rows[size_t(k)]), int(cols[size_t(k)]), values[size_t(k)]);
+  s.A.resize(int(n), int(n));
+  s.A.setFromTriplets(t.begin(), t.end());
+  return s;
+}
+
+// Preconditioned CG as the engine runs it; returns the iterations (max_iterations + 1 if not
+// converged).
+int pcg(const Sparse& A, const Vector& b, Vector x, const std::function<Vector(const Vector&)>& precondition, double tol,
+        int max_iterations) {
+  Vector r = b - A * x;
+  const double stop = tol * b.norm();
+  if (r.norm() <= stop) return 0;
+  Vector z = precondition(r), p = z;
+  double rz = r.dot(z);
+  for (int it = 1; it <= max_iterations; ++it) {
+    const Vector q = A * p;
+    const double alpha = rz / p.dot(q);
+    x += alpha * p;
+    r -= alpha * q;
+    if (r.norm() <= stop) return it;
+    z = precondition(r);
+    const double rz_new = r.dot(z);
+    p = z + (rz_new / rz) * p;
+    rz = rz_new;
+  }
+  return max_iterations + 1;
+}
+
+struct Level {
+  Sparse A, P;  // P: from the next coarser level to this one (empty on the coarsest)
+  Vector inv_diag;
+  std::vector<std::array<long, 3>> coords;  // per node, in units of this level's spacing
+  std::unique_ptr<Eigen::SimplicialLDLT<Sparse>> direct;
+};
+
+// The nodes of the next coarser level and the trilinear prolongation to `fine`'s nodes.
+Sparse prolongation(const Level& fine, const std::vector<bool>& fixed, std::vector<std::array<long, 3>>* coarse_coords) {
+  std::map<std::array<long, 3>, int> index;
+  std::vector<Eigen::Triplet<double>> t;
+  const int nodes = int(fine.coords.size());
+  for (int i = 0; i < nodes; ++i) {
+    if (fixed.size() && fixed[size_t(3 * i)]) continue;
+    const auto& c = fine.coords[size_t(i)];
+    std::vector<std::pair<long, double>> axis[3];
+    for (int a = 0; a < 3; ++a) {
+      const long lo = c[size_t(a)] >= 0 ? c[size_t(a)] / 2 : -((-c[size_t(a)] + 1) / 2);
+      if (c[size_t(a)] == 2 * lo)
+        axis[a] = {{lo, 1.0}};
+      else
+        axis[a] = {{lo, 0.5}, {lo + 1, 0.5}};
+    }
+    for (const auto& [x, wx] : axis[0])
+      for (const auto& [y, wy] : axis[1])
+        for (const auto& [z, wz] : axis[2]) {
+          const std::array<long, 3> key{x, y, z};
+          auto [at, added] = index.emplace(key, int(index.size()));
+          if (added) coarse_coords->push_back(key);
+          for (int d = 0; d < 3; ++d) t.emplace_back(3 * i + d, 3 * at->second + d, wx * wy * wz);
+        }
+  }
+  Sparse P(3 * nodes, 3 * int(index.size()));
+  P.setFromTriplets(t.begin(), t.end());
+  return P;
+}
+
+struct Multigrid {
+  std::vector<Level> levels;
+  int nu = 2;
+  double omega = 0.6;
+  double cost = 0;  // fine-operator applications per cycle
+
+  Multigrid(const System& s, int nu_, double omega_, int direct_below) : nu(nu_), omega(omega_) {
+    Level fine;
+    fine.A = s.A;
+    double lo[3] = {1e300, 1e300, 1e300};
+    for (int i = 0; i < s.nodes; ++i)
+      for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], s.rest[size_t(3 * i + a)]);
+    for (int i = 0; i < s.nodes; ++i) {
+      std::array<long, 3> c;
+      for (int a = 0; a < 3; ++a) c[size_t(a)] = std::lround((s.rest[size_t(3 * i + a)] - lo[a]) / s.h);
+      fine.coords.push_back(c);
+    }
+    levels.push_back(std::move(fine));
+    while (levels.back().A.rows() > direct_below) {
+      Level& f = levels.back();
+      Level coarse;
+      f.P = prolongation(f, levels.size() == 1 ? s.fixed : std::vector<bool>{}, &coarse.coords);
+      coarse.A = Sparse(f.P.transpose() * f.A * f.P);
+      if (coarse.A.rows() >= f.A.rows()) break;
+      levels.push_back(std::move(coarse));
+    }
+    double share = 1;
+    for (size_t l = 0; l < levels.size(); ++l) {
+      Level& L = levels[l];
+      L.inv_diag = L.A.diagonal().cwiseInverse();
+      if (l + 1 == levels.size()) {
+        L.direct = std::make_unique<Eigen::SimplicialLDLT<Sparse>>(L.A);
+        if (L.direct->info() != Eigen::Success) throw std::runtime_error("coarsest level not factorised");
+      } else {
+        cost += share * (2 * nu + 1);
+      }
+      share *= double(levels[std::min(l + 1, levels.size() - 1)].A.rows()) / double(L.A.rows());
+    }
+  }
+
+  Vector cycle(size_t l, const Vector& b) const {
+    const Level& L = levels[l];
+    if (L.direct) return L.direct->solve(b);
+    Vector x = Vector::Zero(b.size());
+    for (int k = 0; k < nu; ++k) x += omega * L.inv_diag.cwiseProduct(b - L.A * x);
+    const Vector r = b - L.A * x;
+    x += L.P * cycle(l + 1, L.P.transpose() * r);
+    for (int k = 0; k < nu; ++k) x += omega * L.inv_diag.cwiseProduct(b - L.A * x);
+    return x;
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> files;
+  double tol = 1e-6;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--tol" && i + 1 < argc)
+      tol = std::atof(argv[++i]);
+    else
+      files.push_back(a);
+  }
+  if (files.empty()) {
+    std::fprintf(stderr, "usage: ssc_preconditioner_study FILE... [--tol 1e-6] (files from SSC_DUMP_NEWMARK_SYSTEM)\n");
+    return 2;
+  }
+  for (const std::string& f : files) {
+    const System s = read_system(f);
+    const Vector inv_diag = s.A.diagonal().cwiseInverse();
+    const int jacobi = pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return Vector(inv_diag.cwiseProduct(r)); }, tol, 2000);
+    std::printf("%s: %d nodes, %ld nonzeros; Jacobi PCG %d iterations (cost %d)\n", f.c_str(), s.nodes, long(s.A.nonZeros()),
+                jacobi, jacobi);
+    for (const int direct_below : {3000, 600})
+      for (const int nu : {1, 2, 3})
+        for (const double omega : {0.5, 0.7}) {
+          const Multigrid mg(s, nu, omega, direct_below);
+          const int it = pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return mg.cycle(0, r); }, tol, 2000);
+          std::string sizes;
+          for (const Level& L : mg.levels) sizes += (sizes.empty() ? "" : "/") + std::to_string(L.A.rows());
+          std::printf("  multigrid V(%d,%d) omega %.1f, %zu levels (%s unknowns): %d iterations (cost %.0f)\n", nu, nu,
+                      omega, mg.levels.size(), sizes.c_str(), it, it * (1 + mg.cost));
+        }
+  }
+  return 0;
+}
