@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 
@@ -406,6 +407,65 @@ TEST(PrepareSynthetic, CalculixDropOntoAnIncline) {
   EXPECT_LT((est_v - truth_v).norm(), 0.1 * truth_v.norm());
   EXPECT_GE(p.velocity.frames, 2);
   for (size_t f = 0; f < p.object_pixels.size(); ++f) EXPECT_GT(p.object_pixels[f], 300) << "frame " << f;
+}
+
+}  // namespace
+}  // namespace ssc
+
+namespace ssc {
+namespace {
+
+// Three consecutive frames of a real structured-light camera (tests/data/pcl_floor_frames: PCL's
+// ImageGrabber test sequence, 640x480, millimetres, about 4 frames a second as saved): a closed
+// laptop standing on a carpet floor with a box lying beside it, the camera looking down at about
+// 45 degrees and nearly still. Checks the TUM reader with real, uneven timestamps and a depth
+// scale other than TUM's, and the plane search on real depth: the floor is the largest plane of
+// every frame and nearly the same plane in all three (its fit turns by 0.4 degrees and moves by
+// 3 mm from the first frame to the last: enough to change the far pixels' depth beyond the noise,
+// so prepare warns camera_moving here), the box's top is a plane parallel to it, a box's height
+// above it. Nothing else moves in these frames, so the object search and the registration are not
+// tested here (prepare takes what does not move for the background).
+TEST(PrepareRealRecording, PclFloorFramesFloorAndBoxTop) {
+  RecordingOptions options;
+  options.intrinsics = "525,525,320,240";  // the sequence's own xml files
+  options.depth_scale = 0.001;
+  const DepthRecording rec = read_recording(std::string(SSC_TEST_DATA_DIR) + "/pcl_floor_frames", options);
+  EXPECT_EQ(rec.format, "tum");
+  ASSERT_EQ(rec.frames.size(), 3u);
+  EXPECT_NEAR(rec.timestamps[1] - rec.timestamps[0], 0.254471, 1e-6);
+  EXPECT_NEAR(rec.timestamps[2] - rec.timestamps[1], 0.263712, 1e-6);
+  const SensorNoise noise;
+  std::vector<Plane> floors;
+  for (size_t f = 0; f < rec.frames.size(); ++f) {
+    const ImagePlanes found = find_image_planes(rec.frames[f], rec.intrinsics, noise, rec.depth_scale);
+    ASSERT_GE(found.planes.size(), 2u) << "frame " << f;
+    const Plane& floor = found.planes[0].plane;  // the largest
+    const double pitch = std::acos(std::clamp(floor.normal.dot(Eigen::Vector3d(0, -1, 0)), -1.0, 1.0)) / kDeg;
+    const double camera_height = -floor.offset;  // the camera, at the origin, above the floor (normal towards it)
+    // The box's top: a smaller plane facing the same way, between the floor and the camera.
+    const DetectedPlane* top = nullptr;
+    for (size_t i = 1; i < found.planes.size() && !top; ++i)
+      if (found.planes[i].plane.normal.dot(floor.normal) > std::cos(5 * kDeg)) top = &found.planes[i];
+    ASSERT_NE(top, nullptr) << "frame " << f << ": no plane parallel to the floor";
+    const double tilt = std::acos(std::min(1.0, top->plane.normal.dot(floor.normal))) / kDeg;
+    const double above = top->plane.offset - floor.offset;
+    std::printf("frame %zu: floor %.0f deg from the image's up, camera %.3f m above it (rms %.1f mm, %zu points); box "
+                "top %.1f deg from parallel, %.3f m above the floor (%zu points)\n", f, pitch, camera_height,
+                1000 * found.planes[0].rms, found.planes[0].inliers.size(), tilt, above, top->inliers.size());
+    EXPECT_GT(pitch, 30) << "a camera looking down at the floor";
+    EXPECT_LT(pitch, 60);
+    EXPECT_GT(camera_height, 0.5);
+    EXPECT_LT(camera_height, 1.2);
+    EXPECT_LT(found.planes[0].rms, 0.006) << "a floor fitted to real Kinect-class depth at 0.7-1.7 m";
+    EXPECT_LT(tilt, 5.0);
+    EXPECT_GT(above, 0.06) << "a box lying on the floor";
+    EXPECT_LT(above, 0.15);
+    floors.push_back(floor);
+  }
+  for (size_t f = 1; f < floors.size(); ++f) {  // the camera nearly still: one floor
+    EXPECT_LT(std::acos(std::min(1.0, floors[f].normal.dot(floors[0].normal))) / kDeg, 1.0) << "frame " << f;
+    EXPECT_NEAR(floors[f].offset, floors[0].offset, 0.005) << "frame " << f;
+  }
 }
 
 }  // namespace

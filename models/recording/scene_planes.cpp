@@ -17,6 +17,10 @@ namespace ssc {
 namespace {
 
 constexpr double kFloorLikeCos = 0.866;  // a plane within 30 degrees of level can hold the object
+// Without --gravity, up is the largest plane within 60 degrees of the image's up with the object
+// above it: cameras look down at tables and floors by up to about 60 degrees (the real floor
+// frames of tests/data/pcl_floor_frames at 46).
+constexpr double kImageUpCos = 0.5;
 
 // Distance from a camera-frame point to the nearest inlier of a plane (its inliers are pixels of `img`).
 double distance_to_inliers(const Eigen::Vector3d& x, const std::vector<int>& pixels, const DepthImage& img,
@@ -36,8 +40,8 @@ int set_world_frame(PreparedRecording& p, const DepthComponent& object, const De
   const DepthIntrinsics& k = p.recording.intrinsics;
   const double scan_extent = p.scan.extents[0];
   // Up: the accelerometer's reading at rest points away from the ground (it measures the
-  // support's push, not gravity); without it the largest floor-like plane under the object,
-  // floor-like meaning within 45 degrees of the image's up (cameras are held about upright).
+  // support's push, not gravity); without it the largest plane under the object within
+  // kImageUpCos of the image's up.
   if (gravity) {
     if (!(gravity->norm() > 0) || !gravity->allFinite())
       throw InputError("--gravity: give the accelerometer's reading at rest in the depth camera's frame, e.g. 0,-9.81,0");
@@ -50,14 +54,14 @@ int set_world_frame(PreparedRecording& p, const DepthComponent& object, const De
     int best = -1;
     for (size_t i = 0; i < p.planes.size(); ++i) {
       const Plane& pl = p.planes[i].camera;
-      if (pl.normal.dot(Eigen::Vector3d(0, -1, 0)) > std::cos(M_PI / 4) && pl.distance(object.centroid) > 0) {
+      if (pl.normal.dot(Eigen::Vector3d(0, -1, 0)) > kImageUpCos && pl.distance(object.centroid) > 0) {
         best = int(i);
         break;  // planes come largest first
       }
     }
     if (best < 0)
       throw InputError(fmt::format("{}: no plane under the object: none of the {} planes found is level enough (within "
-                                   "45 degrees of the image's up) with the object above it; give the accelerometer's "
+                                   "60 degrees of the image's up) with the object above it; give the accelerometer's "
                                    "reading with --gravity gx,gy,gz, and make sure the table or floor the object "
                                    "falls onto is in view", where, p.planes.size()));
     p.up_camera = p.planes[std::size_t(best)].camera.normal;
