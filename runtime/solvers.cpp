@@ -4,12 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <atomic>
-#include <cstdint>
-#include <cstdlib>
-#include <fstream>
 #include <stdexcept>
-#include <string>
 
 #include "ops/corotation.h"
 #include "ops/elasticity.h"
@@ -17,6 +12,7 @@
 #include "ops/newmark.h"
 #include "runtime/errors.h"
 #include "runtime/pcg.h"
+#include "runtime/system_dump.h"
 
 namespace ssc {
 namespace {
@@ -102,55 +98,6 @@ struct NewmarkSystem {
   }
 };
 
-// SSC_DUMP_NEWMARK_SYSTEM=FOLDER[:K,K,...] writes the Newmark system of the interpreter's
-// solves number K (0, 1, ... in this process; default 0) for batch item 0 to
-// FOLDER/newmark-K.bin, for tools/profile/preconditioner_study.cpp: the matrix assembled
-// column by column from the matrix-free operator, the right-hand side, the initial guess, the
-// fixed mask and the nodes' rest positions. A research aid: each dump costs one operator
-// application per unknown.
-template <class Real>
-void dump_newmark_system_if_asked(const NewmarkSystem<Real>& system, const Real* rhs, const Real* guess) {
-  static const char* asked = std::getenv("SSC_DUMP_NEWMARK_SYSTEM");
-  static std::atomic<int> solve_count{0};
-  if (!asked || !*asked) return;
-  const int k = solve_count++;
-  std::string folder = asked, which = "0";
-  if (const size_t colon = folder.find(':'); colon != std::string::npos) which = folder.substr(colon + 1), folder.resize(colon);
-  bool wanted = false;
-  for (size_t at = 0; at <= which.size();) {
-    const size_t comma = std::min(which.find(',', at), which.size());
-    wanted |= std::atoi(which.substr(at, comma - at).c_str()) == k;
-    at = comma + 1;
-  }
-  if (!wanted) return;
-  const StaticArrays& g = system.g;
-  const long n = 3L * g.node_count;
-  std::vector<Real> p(size_t(n), Real(0)), q(static_cast<size_t>(n)), corner(24 * size_t(g.cell_count));
-  std::vector<std::int64_t> rows, cols;
-  std::vector<double> values;
-  for (long j = 0; j < n; ++j) {
-    p[size_t(j)] = Real(1);
-    system.apply(p.data(), q.data(), corner);
-    p[size_t(j)] = Real(0);
-    for (long i = 0; i < n; ++i)
-      if (q[size_t(i)] != Real(0)) rows.push_back(i), cols.push_back(j), values.push_back(double(q[size_t(i)]));
-  }
-  std::ofstream out(folder + "/newmark-" + std::to_string(k) + ".bin", std::ios::binary);
-  auto put = [&](const void* data, size_t bytes) { out.write(static_cast<const char*>(data), std::streamsize(bytes)); };
-  const std::int64_t header[3] = {g.node_count, std::int64_t(values.size()), 0};
-  put(header, sizeof header);
-  put(&g.h, sizeof g.h);
-  put(g.node_rest.data(), g.node_rest.size() * sizeof(double));
-  for (long i = 0; i < n; ++i) {
-    const double v[3] = {double(rhs[i]), double(guess[i]), double(system.is_fixed(int(i / 3)))};
-    put(v, sizeof v);
-  }
-  put(rows.data(), rows.size() * sizeof(std::int64_t));
-  put(cols.data(), cols.size() * sizeof(std::int64_t));
-  put(values.data(), values.size() * sizeof(double));
-  if (!out) throw std::runtime_error("SSC_DUMP_NEWMARK_SYSTEM: cannot write into " + folder);
-}
-
 template <class Real>
 NewmarkSystem<Real> newmark_system(Interpreter<Real>& in, const Slots<Real>& a) {
   const auto c = ops::newmark_coefficients(a.scalar("dt"), a.scalar("theta"), a.scalar("mass_damping"),
@@ -171,7 +118,9 @@ void newmark_forward(Interpreter<Real>& in, const OpNode& op, int b) {
   for (int i = 0; i < 3 * g.node_count; ++i)
     u[i] = fixed[i / 3] != Real(0) ? Real(0) : guess ? guess[i] : u_prev[i] + system.c.dt * v_prev[i];
   const SolverOptions& o = in.options();
-  if (b == 0) dump_newmark_system_if_asked(system, a.value("rhs"), u);
+  if (b == 0)
+    dump_system_if_asked(g, a.value("rhs"), u, [&](int node) { return system.is_fixed(node); },
+                         [&](const Real* p, Real* q, std::vector<Real>& corner) { system.apply(p, q, corner); });
   const PcgResult r = system.solve(a.value("rhs"), u, o.cg_tolerance, o.cg_max_iterations);
   in.mutable_report().cg_iterations[b] = r.iterations;
   in.mutable_report().cg_residual[b] = r.relative_residual;

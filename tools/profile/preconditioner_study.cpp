@@ -1,6 +1,6 @@
 // How many CG iterations a time step's Newmark solve needs under other preconditioners than
 // the engine's Jacobi (issue 27: the step is ~95 % CG iterations). Reads systems written by
-// SSC_DUMP_NEWMARK_SYSTEM (runtime/solvers.cpp), assembles them as sparse matrices and runs
+// SSC_DUMP_NEWMARK_SYSTEM (runtime/system_dump.h), assembles them as sparse matrices and runs
 // PCG from the engine's initial guess to the engine's tolerance (||r|| <= tol ||b||) with:
 //   - Jacobi (the engine's; its count must match the engine's report for the step),
 //   - geometric multigrid V(nu, nu) cycles on the cell grid: coarse nodes every 2^l cells,
