@@ -466,6 +466,30 @@ TEST(PrepareRealRecording, PclFloorFramesFloorAndBoxTop) {
     EXPECT_LT(std::acos(std::min(1.0, floors[f].normal.dot(floors[0].normal))) / kDeg, 1.0) << "frame " << f;
     EXPECT_NEAR(floors[f].offset, floors[0].offset, 0.005) << "frame " << f;
   }
+  // prepare without --gravity, picking the box (a scan of about its size): up is the floor's
+  // normal although the camera looks down by more than 45 degrees, and the slight camera motion
+  // is told.
+  const std::string dir = scratch("pcl-floor");
+  const std::string box = dir + "/box.obj";
+  {
+    std::ofstream f(box);
+    for (int i = 0; i < 8; ++i)
+      f << "v " << ((i & 1) ? 0.125 : -0.125) << " " << ((i & 2) ? 0.06 : -0.06) << " " << ((i & 4) ? 0.075 : -0.075) << "\n";
+    f << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+  }
+  PrepareOptions o;
+  o.recording_folder = std::string(SSC_TEST_DATA_DIR) + "/pcl_floor_frames";
+  o.recording = options;
+  o.mesh = box;
+  o.density = 100;
+  o.pick = Eigen::Vector2d(440, 240);
+  clear_warnings();
+  const PreparedRecording p = prepare_recording(o);
+  EXPECT_TRUE(p.gravity_from_plane);
+  EXPECT_LT(std::acos(std::min(1.0, p.up_camera.dot(floors[0].normal))) / kDeg, 1.0);
+  bool moving = false;
+  for (const Warning& w : warnings()) moving |= w.code == "camera_moving";
+  EXPECT_TRUE(moving);
 }
 
 }  // namespace

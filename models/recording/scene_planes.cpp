@@ -61,9 +61,9 @@ int set_world_frame(PreparedRecording& p, const DepthComponent& object, const De
     }
     if (best < 0)
       throw InputError(fmt::format("{}: no plane under the object: none of the {} planes found is level enough (within "
-                                   "60 degrees of the image's up) with the object above it; give the accelerometer's "
+                                   "{:.0f} degrees of the image's up) with the object above it; give the accelerometer's "
                                    "reading with --gravity gx,gy,gz, and make sure the table or floor the object "
-                                   "falls onto is in view", where, p.planes.size()));
+                                   "falls onto is in view", where, p.planes.size(), std::acos(kImageUpCos) * 180 / M_PI));
     p.up_camera = p.planes[std::size_t(best)].camera.normal;
     p.gravity_from_plane = true;
     warn("gravity_from_plane", fmt::format("{}: no --gravity: up is taken as the normal of the largest level plane "
