@@ -8,10 +8,12 @@
 // reproducible.
 #pragma once
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "graph/graph.h"
+#include "runtime/band_factor.h"
 #include "runtime/static_arrays.h"
 #include "runtime/tensor_store.h"
 
@@ -67,6 +69,9 @@ class Interpreter {
   const Real* static_real(const std::string& name) const { return static_real_.at(name).data(); }
   RunReport& mutable_report() { return report_; }
   std::vector<Real>& extension_adjoint_guess(int b) { return extension_adjoint_guess_[b]; }
+  // The band Laplacian's factor (runtime/band_factor.h), built on first use; nullptr where the
+  // extension solves iteratively.
+  const BandLaplacianFactor* band_laplacian_factor() { return band_factor_->get(grid_); }
   // The time-step adjoint solves of this run_adjoint() so far (none at its start and for
   // run_op_adjoint): their count and the largest right-hand side norm, their residual
   // reference (runtime/solvers.cpp, newmark_adjoint).
@@ -111,6 +116,7 @@ class Interpreter {
   std::map<std::string, std::vector<int>> static_int_;
   std::vector<std::map<std::string, Scratch>> scratch_;  // per op, by key
   std::vector<std::vector<Real>> extension_adjoint_guess_;  // per batch item, warm start
+  std::unique_ptr<BandFactorCache> band_factor_ = std::make_unique<BandFactorCache>();
   std::vector<std::vector<Real>> newmark_adjoint_guess_;    // per batch item, warm start
   std::vector<AdjointSolves> adjoint_solves_;               // per batch item
   bool warm_adjoint_solves_ = false;

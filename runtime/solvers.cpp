@@ -11,6 +11,7 @@
 #include "ops/gather.h"
 #include "ops/newmark.h"
 #include "runtime/errors.h"
+#include "runtime/band_factor.h"
 #include "runtime/pcg.h"
 #include "runtime/system_dump.h"
 
@@ -207,6 +208,11 @@ void extension_forward(Interpreter<Real>& in, const OpNode& op, int b) {
     }
     store3(rhs.data(), i, s);
   }
+  if (const BandLaplacianFactor* factor = in.band_laplacian_factor()) {
+    factor->solve(rhs.data(), x);
+    in.mutable_report().extension_iterations[b] = 0;  // solved directly
+    return;
+  }
   std::copy_n(a.value("band_guess"), rhs.size(), x);
   const SolverOptions& o = in.options();
   const PcgResult r = solve_band_laplacian(g, rhs.data(), x, o.extension_tolerance, o.extension_max_iterations);
@@ -225,10 +231,14 @@ void extension_adjoint(Interpreter<Real>& in, const OpNode& op, int b) {
   // Warm start from the previous (later) step's solution of this backward pass.
   std::vector<Real>& y = in.extension_adjoint_guess(b);
   y.resize(3 * size_t(g.band_count), Real(0));
-  const SolverOptions& o = in.options();
-  const PcgResult r = solve_band_laplacian(g, a.bar("band_u"), y.data(), o.extension_tolerance, o.extension_max_iterations);
-  if (!r.converged)
-    throw SimulationError(fmt::format("the adjoint extension solve did not converge (batch item {})", b), {b});
+  if (const BandLaplacianFactor* factor = in.band_laplacian_factor()) {  // L is symmetric: the same factor
+    factor->solve(a.bar("band_u"), y.data());
+  } else {
+    const SolverOptions& o = in.options();
+    const PcgResult r = solve_band_laplacian(g, a.bar("band_u"), y.data(), o.extension_tolerance, o.extension_max_iterations);
+    if (!r.converged)
+      throw SimulationError(fmt::format("the adjoint extension solve did not converge (batch item {})", b), {b});
+  }
   Real* u_bar = a.bar("u");
   for (int i = 0; i < g.band_count; ++i)
     for (int k = 0; k < 6; ++k) {

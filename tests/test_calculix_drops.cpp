@@ -144,10 +144,12 @@ TEST_F(CalculixDropsFit, DiagnoseFitsTheDiscretizationControlOnHalfTheCellSize) 
   EXPECT_LT(control.at("heldout_cost").get<double>(), d.at("base").at("heldout_cost").get<double>());
   EXPECT_GT(control.at("gain").get<double>(), 0.2);
   EXPECT_EQ(d.at("cause"), "none");  // ccx's incline is frictionless
-  for (const json& c : d.at("candidates"))
-    if (c.at("name") == "friction")
+  for (const json& c : d.at("candidates")) {
+    if (c.at("name") == "friction") {
       EXPECT_DOUBLE_EQ(c.at("discretization_gain").get<double>(),
                        std::max(control.at("gain").get<double>(), step.at("gain").get<double>()));
+    }
+  }
 }
 
 }  // namespace
