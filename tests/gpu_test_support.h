@@ -11,6 +11,7 @@
 
 #include "models/sim/scene.h"
 #include "runtime/cuda_runtime.h"
+#include "runtime/interpreter.h"
 
 namespace ssc {
 
@@ -23,6 +24,14 @@ inline const std::string& test_cache_root() {
     return p.string();
   }();
   return dir;
+}
+
+// The GPU's solver options for a comparison with the interpreter: the interpreter factors the
+// band Laplacian (runtime/band_factor.h), so in double the GPU's extension PCG runs to 1e-13
+// to agree within the tests' 1e-10 (float keeps the scene's tolerance, which it can reach).
+inline SolverOptions gpu_options_against_interpreter(SolverOptions so, const std::string& real) {
+  if (real == "double") so.extension_tolerance = 1e-13;
+  return so;
 }
 
 inline Scene torus_scene(const std::vector<std::string>& overrides = {}) {

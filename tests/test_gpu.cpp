@@ -53,7 +53,7 @@ TensorStore<double> gpu_vs_interpreter(const std::string& real, double tolerance
   for (int s = 0; s < 3; ++s) sim.step();  // a deformed, moving state
   Interpreter<double>& cpu = sim.interpreter();
   TensorStore<double> before = cpu.store();
-  SolverOptions so = cpu.options();
+  const SolverOptions so = gpu_options_against_interpreter(cpu.options(), real);
   go.real = real;
   GpuTimestep gpu(cpu.graph(), grid, 2, so, go);
   gpu.upload(before);
@@ -307,7 +307,7 @@ std::vector<std::vector<double>> adjoint_vs_interpreter(const std::string& real,
   const TimestepGraph& tg = sim.timestep_graph();
   Interpreter<double>& cpu = sim.interpreter();
   go.real = real;
-  GpuTimestep gpu(cpu.graph(), grid, 2, cpu.options(), go);
+  GpuTimestep gpu(cpu.graph(), grid, 2, gpu_options_against_interpreter(cpu.options(), real), go);
   gpu.upload(cpu.store());
   gpu.run();
   cpu.run();

@@ -143,7 +143,7 @@ void each_forward_kernel(const std::string& real, double tolerance, const std::v
   const TensorStore<double> reference = cpu.store();
   GpuOptions go;
   go.real = real;
-  GpuTimestep gpu(graph, r.grid, 2, cpu.options(), go);
+  GpuTimestep gpu(graph, r.grid, 2, gpu_options_against_interpreter(cpu.options(), real), go);
   double worst = 0;
   for (const KernelGroup& g : groups_of(plan.forward)) {
     TensorStore<double> poisoned = reference;
@@ -189,7 +189,7 @@ void each_adjoint_kernel(const std::string& real, double tolerance, const std::v
   const KernelPlan plan = plan_kernels(graph);
   GpuOptions go;
   go.real = real;
-  GpuTimestep gpu(graph, r.grid, 2, cpu.options(), go);
+  GpuTimestep gpu(graph, r.grid, 2, gpu_options_against_interpreter(cpu.options(), real), go);
   gpu.upload(cpu.store(), true);
   gpu.clear_adjoints(true);
   cpu.clear_adjoints(true);
