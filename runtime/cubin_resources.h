@@ -1,7 +1,7 @@
 // A kernel's registers and static shared memory read from its CUBIN (an ELF64 file), for
 // when ptxas' verbose report is missing from NVRTC's log: on the 32-core GPU machines NVRTC
-// 13.0 returned empty logs for some or all kernels of a process, depending on which thread
-// called it first (docs/benchmarks.md, "Kernel compilation"). The register count is the
+// 13.0 returned empty logs for some or all kernels of a process, seemingly depending on which
+// thread called it first (docs/benchmarks.md, "Kernel compilation"). The register count is the
 // EIATTR_REGCOUNT attribute in ".nv.info" for the kernel's symbol (the sh_info of its
 // ".text.<name>" section); the static shared memory is the size of its ".nv.shared.<name>"
 // section less the 1 KB that sm_80 and later reserve. Stack and spills are not read. The
