@@ -947,7 +947,7 @@ json sphere_scene() {
   j["initial"] = {{"linear_velocity", {0.0, -2.0, 0.0}}};
   j["ground"] = {{"height", 0.0}, {"normal", {0.0, 1.0, 0.0}}, {"stiffness", 3e5}, {"softmin_alpha", 100}};
   j["time"] = {{"dt", 0.01}, {"steps", 20}, {"theta", 0.6}};
-  // The interpreter factors the band Laplacian; the GPU's PCG to 1e-13 agrees with it to 1e-9.
+  // The interpreter factors the band Laplacian: the GPU's PCG runs to 1e-13 to agree with it to 1e-9.
   j["solver"] = {{"extension_tolerance", 1e-13}};
   json cams = json::array();
   cams.push_back({{"name", "a"}, {"width", 32}, {"height", 32}, {"fov_deg", 40}, {"eye", {1.2, 0.8, 1.0}},
