@@ -35,6 +35,15 @@ std::string scratch(const std::string& name) {
   return dir.string();
 }
 
+// A box scan centred on its origin (an OBJ of 8 vertices and 6 faces), half extents in the scan's units.
+std::string write_box_obj(const std::string& path, double hx, double hy, double hz) {
+  std::ofstream f(path);
+  for (int i = 0; i < 8; ++i)
+    f << "v " << ((i & 1) ? hx : -hx) << " " << ((i & 2) ? hy : -hy) << " " << ((i & 4) ? hz : -hz) << "\n";
+  f << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
+  return path;
+}
+
 PreparedSynthetic prepare_synthetic(const std::string& name, const SyntheticRecordingSpec& spec) {
   PreparedSynthetic s;
   s.spec = spec;
@@ -170,13 +179,7 @@ namespace {
 // found on the desk and registered resting on it.
 TEST(PrepareRealRecording, TumDeskFrame) {
   const std::string dir = scratch("tum-desk");
-  const std::string cube = dir + "/dice.obj";
-  {
-    std::ofstream f(cube);
-    for (int i = 0; i < 8; ++i)
-      f << "v " << ((i & 1) ? 0.5 : -0.5) << " " << ((i & 2) ? 0.5 : -0.5) << " " << ((i & 4) ? 0.5 : -0.5) << "\n";
-    f << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
-  }
+  const std::string cube = write_box_obj(dir + "/dice.obj", 0.5, 0.5, 0.5);
   PrepareOptions o;
   o.recording_folder = std::string(SSC_TEST_DATA_DIR) + "/tum_desk_frame";
   o.recording.intrinsics = "525,525,319.5,239.5";
@@ -470,13 +473,7 @@ TEST(PrepareRealRecording, PclFloorFramesFloorAndBoxTop) {
   // normal although the camera looks down by more than 45 degrees, and the slight camera motion
   // is told.
   const std::string dir = scratch("pcl-floor");
-  const std::string box = dir + "/box.obj";
-  {
-    std::ofstream f(box);
-    for (int i = 0; i < 8; ++i)
-      f << "v " << ((i & 1) ? 0.125 : -0.125) << " " << ((i & 2) ? 0.06 : -0.06) << " " << ((i & 4) ? 0.075 : -0.075) << "\n";
-    f << "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n";
-  }
+  const std::string box = write_box_obj(dir + "/box.obj", 0.125, 0.06, 0.075);
   PrepareOptions o;
   o.recording_folder = std::string(SSC_TEST_DATA_DIR) + "/pcl_floor_frames";
   o.recording = options;
