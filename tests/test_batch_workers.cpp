@@ -9,6 +9,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "models/cost/surface_constraint.h"
 #include "models/io/byte_record.h"
@@ -144,6 +146,26 @@ TEST(ComputeDevice, NamesAndTheirGpus) {
   for (const char* bad : {"cuda:", "cuda:x", "cuda:-1", "gpu", "cuda:1a"})
     EXPECT_THROW(device_gpus(bad), InputError) << bad;
   EXPECT_EQ(describe_device("cpu"), "cpu");
+}
+
+// side_by_side on the CPU: every item runs, in order, on the device given, and the first
+// failure is rethrown only after the others ran.
+TEST(ComputeDevice, SideBySideRunsEveryItemBeforeItRethrows) {
+  std::vector<std::string> ran(4);
+  side_by_side(4, "cpu", [&](size_t k, const std::string& device) { ran[k] = device; });
+  EXPECT_EQ(ran, std::vector<std::string>(4, "cpu"));
+  std::vector<int> order;
+  try {
+    side_by_side(4, "cpu", [&](size_t k, const std::string&) {
+      order.push_back(int(k));
+      if (k == 1) throw InputError("item 1");
+      if (k == 2) throw std::runtime_error("item 2");
+    });
+    ADD_FAILURE() << "item 1's error expected";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "item 1");
+  }
+  EXPECT_EQ(order, (std::vector<int>{0, 1, 2, 3}));
 }
 
 // What a split among GPUs and ranks relies on: a point evaluated in a batch gives the bits it

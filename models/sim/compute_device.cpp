@@ -48,21 +48,21 @@ std::vector<int> device_gpus(const std::string& device) {
 
 void side_by_side(size_t count, const std::string& device, const std::function<void(size_t, const std::string&)>& fn) {
   const std::vector<int> gpus = runs_on_gpu(device) && ranks::count() == 1 ? device_gpus(device) : std::vector<int>{};
-  if (gpus.empty() || count <= 1) {
-    for (size_t k = 0; k < count; ++k) fn(k, device);
-    return;
-  }
   std::vector<std::exception_ptr> failures(count);
-  std::vector<std::thread> workers;
-  for (size_t k = 0; k < count; ++k)
-    workers.emplace_back([&, k] {
-      try {
-        fn(k, gpu_device(gpus[k % gpus.size()]));
-      } catch (...) {
-        failures[k] = std::current_exception();
-      }
-    });
-  for (std::thread& w : workers) w.join();
+  auto run = [&](size_t k, const std::string& on) {
+    try {
+      fn(k, on);
+    } catch (...) {
+      failures[k] = std::current_exception();
+    }
+  };
+  if (gpus.empty() || count <= 1) {
+    for (size_t k = 0; k < count; ++k) run(k, device);
+  } else {
+    std::vector<std::thread> workers;
+    for (size_t k = 0; k < count; ++k) workers.emplace_back([&, k] { run(k, gpu_device(gpus[k % gpus.size()])); });
+    for (std::thread& w : workers) w.join();
+  }
   for (const std::exception_ptr& f : failures)
     if (f) std::rethrow_exception(f);
 }
