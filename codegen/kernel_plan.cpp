@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <regex>
+#include <stdexcept>
 #include <set>
 
 #include "codegen/cuda_source.h"
@@ -141,6 +142,24 @@ const PlannedKernel* KernelPlan::find(bool adjoint_plan, const std::string& labe
   for (const PlannedKernel& k : adjoint_plan ? adjoint : forward)
     if (k.label() == label && (op < 0 || k.parts.front().op == op)) return &k;
   return nullptr;
+}
+
+size_t KernelPlan::prefix_cut(bool adjoint_plan, int op_count) const {
+  enum class Side { Prefix, Tail, Both };
+  auto side = [op_count](const PlannedKernel& k) {
+    bool prefix = false, tail = false;
+    for (int o : k.ops) (o < op_count ? prefix : tail) = true;
+    return prefix && tail ? Side::Both : tail ? Side::Tail : Side::Prefix;
+  };
+  const std::vector<PlannedKernel>& plan = adjoint_plan ? adjoint : forward;
+  const Side first = adjoint_plan ? Side::Tail : Side::Prefix;
+  size_t cut = 0;
+  while (cut < plan.size() && side(plan[cut]) == first) ++cut;
+  for (size_t i = cut; i < plan.size(); ++i)
+    if (side(plan[i]) != (adjoint_plan ? Side::Prefix : Side::Tail))
+      throw std::logic_error("kernel plan: " + plan[i].name + " keeps the ops from " + std::to_string(op_count) +
+                             " on from being left out");
+  return cut;
 }
 
 static const char* param_kind(KernelParam::Kind k) {

@@ -46,6 +46,11 @@ struct KernelPlan {
   // First forward (adjoint) kernel whose first part has this label; nullptr if none.
   // The first kernel with this label; of op `op` where op >= 0 (a graph may solve twice).
   const PlannedKernel* find(bool adjoint, const std::string& label, int op = -1) const;
+  // The kernels of the graph's first op_count ops alone, for a step that leaves out the tail of
+  // ops from op_count on: forward, kernels [0, prefix_cut); adjoint (the ops reversed),
+  // [prefix_cut, end). std::logic_error where a kernel holds ops of both sides or the tail's
+  // kernels are not together.
+  size_t prefix_cut(bool adjoint, int op_count) const;
   // Readable listing; sanitize_hashes replaces every __<hash8> by __########.
   std::string text(const Graph& g, bool sanitize_hashes = false) const;
 };

@@ -754,7 +754,8 @@ size_t GpuTimestep::free_device_memory() const {
   return free;
 }
 
-void GpuTimestep::run() { impl_->run(); }
+void GpuTimestep::run() { impl_->run(int(impl_->graph.ops().size())); }
+void GpuTimestep::run_prefix(int op_count) { impl_->run(op_count); }
 
 void GpuTimestep::download(TensorStore<double>& store) const {
   for (size_t t = 0; t < impl_->graph.tensors().size(); ++t) download(store, int(t));
@@ -844,7 +845,12 @@ void GpuTimestep::chain_adjoints(const std::vector<std::pair<int, int>>& from_to
 
 void GpuTimestep::run_adjoint() {
   impl_->ensure_adjoint();
-  impl_->run_adjoint();
+  impl_->run_adjoint(int(impl_->graph.ops().size()));
+}
+
+void GpuTimestep::run_adjoint_prefix(int op_count) {
+  impl_->ensure_adjoint();
+  impl_->run_adjoint(op_count);
 }
 
 void GpuTimestep::run_kernels(bool adjoint, int first, int last) {

@@ -90,6 +90,7 @@ class GpuTimestep : public StepBackend {
   void upload(const TensorStore<double>& store, bool intermediates = false) override;
   // One forward step; throws SimulationError if a solve does not converge.
   void run() override;
+  void run_prefix(int op_count) override;
   // Copies every tensor back (converted to double), or one tensor (all batch items).
   void download(TensorStore<double>& store) const;
   void download(TensorStore<double>& store, int tensor) const override;
@@ -124,6 +125,7 @@ class GpuTimestep : public StepBackend {
   void chain_adjoints(const std::vector<std::pair<int, int>>& from_to) override;
   // One adjoint step; throws SimulationError if an adjoint solve does not converge.
   void run_adjoint() override;
+  void run_adjoint_prefix(int op_count) override;
   // Kernels [first, last] of the forward (adjoint) plan alone, on what the device holds;
   // a solver stage among them launches its op's whole solve (tests of single kernels).
   void run_kernels(bool adjoint, int first, int last);

@@ -123,9 +123,11 @@ void GpuTimestep::Impl::solve_forward(int o) {
     extension(o);
 }
 
-void GpuTimestep::Impl::run() {
-  segment_prefix = "segment";
-  launch_plan(plan.forward.data(), plan.forward.data() + plan.forward.size(), "segment 0",
+void GpuTimestep::Impl::run(int op_count) {
+  const bool whole = op_count >= int(graph.ops().size());
+  const size_t end = whole ? plan.forward.size() : plan.prefix_cut(false, op_count);
+  segment_prefix = whole ? "segment" : fmt::format("segment (ops < {})", op_count);
+  launch_plan(plan.forward.data(), plan.forward.data() + end, segment_prefix + " 0",
               [this](int o) { solve_forward(o); }, "forward step");
 }
 
@@ -177,18 +179,21 @@ void GpuTimestep::Impl::solve_adjoint(int o) {
     adjoint_extension(o);
 }
 
-void GpuTimestep::Impl::run_adjoint() {
+void GpuTimestep::Impl::run_adjoint(int op_count) {
   // The first segment holds the extension setup, whose zero_x argument differs between
-  // the first step of a backward pass and the others: one captured graph each.
-  segment_prefix = "adjoint segment";
+  // the first step of a backward pass and the others: one captured graph each. A step
+  // without the extension leaves its warm start to the next step that has it.
+  const bool whole = op_count >= int(graph.ops().size());
+  const size_t begin = whole ? 0 : plan.prefix_cut(true, op_count);
+  segment_prefix = whole ? "adjoint segment" : fmt::format("adjoint segment (ops < {})", op_count);
   adjoint_reference_set = false;
   warm_adjoint_solves = true;
   adjoint_cg_iterations.assign(batch, 0);
-  launch_plan(plan.adjoint.data(), plan.adjoint.data() + plan.adjoint.size(),
-              fresh_backward ? "adjoint segment 0 (fresh)" : "adjoint segment 0", [this](int o) { solve_adjoint(o); },
-              "adjoint step");
+  launch_plan(plan.adjoint.data() + begin, plan.adjoint.data() + plan.adjoint.size(),
+              !whole ? segment_prefix + " 0" : fresh_backward ? "adjoint segment 0 (fresh)" : "adjoint segment 0",
+              [this](int o) { solve_adjoint(o); }, "adjoint step");
   warm_adjoint_solves = false;
-  fresh_backward = false;
+  if (whole) fresh_backward = false;
 }
 
 }  // namespace ssc

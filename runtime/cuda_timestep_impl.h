@@ -174,10 +174,11 @@ struct GpuTimestep::Impl {
   void clear_warm_starts();
   std::vector<Buffer> runs(const std::vector<int>& tensors) const;  // of adjacent tensor buffers  // the adjoint time-step solves' warm starts, for a new backward pass
   void extension(int op);
-  void run();
+  // The step's first op_count ops (every op: the graph's op count).
+  void run(int op_count);
   void adjoint_newmark(int op);
   void adjoint_extension(int op);
-  void run_adjoint();
+  void run_adjoint(int op_count);
 };
 
 }  // namespace ssc

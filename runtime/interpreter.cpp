@@ -139,11 +139,16 @@ void Interpreter<Real>::run_parts(int o, const std::vector<PartSpec>& parts, int
 
 template <class Real>
 void Interpreter<Real>::run() {
+  run_prefix(int(graph_.ops().size()));
+}
+
+template <class Real>
+void Interpreter<Real>::run_prefix(int op_count) {
   const int B = batch();
   report_.cg_iterations.assign(B, 0);
   report_.cg_residual.assign(B, 0.0);
   report_.extension_iterations.assign(B, 0);
-  for (const OpNode& op : graph_.ops()) execute(op);
+  for (int o = 0; o < op_count; ++o) execute(graph_.ops().at(o));
 }
 
 template <class Real>
@@ -181,10 +186,15 @@ void Interpreter<Real>::clear_adjoints(bool including_inputs) {
 
 template <class Real>
 void Interpreter<Real>::run_adjoint() {
+  run_adjoint_prefix(int(graph_.ops().size()));
+}
+
+template <class Real>
+void Interpreter<Real>::run_adjoint_prefix(int op_count) {
   adjoint_solves_.assign(batch(), {});
   report_.adjoint_cg_iterations.assign(batch(), 0);
   warm_adjoint_solves_ = true;
-  for (auto it = graph_.ops().rbegin(); it != graph_.ops().rend(); ++it) execute_adjoint(*it);
+  for (int o = op_count - 1; o >= 0; --o) execute_adjoint(graph_.ops().at(o));
   warm_adjoint_solves_ = false;
 }
 

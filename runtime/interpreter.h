@@ -51,6 +51,8 @@ class Interpreter {
   // Executes every op once. Throws SimulationError if a solve does not converge or
   // produces a non-finite value (naming the op and batch item).
   void run();
+  // The first op_count ops alone (a tail whose outputs nothing reads is left out).
+  void run_prefix(int op_count);
   const RunReport& report() const { return report_; }
   // One op alone (graph order is the caller's business): for tests of single kernels.
   void run_op(int op);
@@ -63,6 +65,7 @@ class Interpreter {
   TensorStore<Real>& adjoint() { return adjoint_; }
   void clear_adjoints(bool including_inputs);
   void run_adjoint();
+  void run_adjoint_prefix(int op_count);  // the adjoint of run_prefix(op_count)'s step
   void run_op_adjoint(int op);
 
   // ---- for the solver schedules (runtime/solvers.cpp) ----

@@ -16,6 +16,7 @@ class InterpreterBackend : public StepBackend {
   void upload(const TensorStore<double>&, bool) override {}
   void download(TensorStore<double>&, int) const override {}
   void run() override;
+  void run_prefix(int op_count) override { in_.run_prefix(op_count); }
   void copy_tensors(const std::vector<std::pair<int, int>>& from_to) override;
   void save_snapshot(int key, const std::vector<int>& tensors) override;
   void load_snapshot(int key, const std::vector<int>& tensors) override;
@@ -28,6 +29,7 @@ class InterpreterBackend : public StepBackend {
   void get_adjoint(int tensor, std::vector<double>& all_items) const override;
   void chain_adjoints(const std::vector<std::pair<int, int>>& from_to) override;
   void run_adjoint() override { in_.run_adjoint(); }
+  void run_adjoint_prefix(int op_count) override { in_.run_adjoint_prefix(op_count); }
 
  private:
   Interpreter<double>& in_;

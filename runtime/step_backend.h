@@ -24,6 +24,10 @@ class StepBackend {
   virtual void download(TensorStore<double>& store, int tensor) const = 0;
   // One forward step; SimulationError if a solve does not converge.
   virtual void run() = 0;
+  // The step's first op_count ops alone: a tail of ops whose outputs nothing reads this step
+  // is left out (the band extension at a step no cost observes). run_adjoint_prefix is its
+  // adjoint.
+  virtual void run_prefix(int op_count) = 0;
   // Copies between tensors of one size (from, to), all batch items: a step's outputs become
   // the next step's state.
   virtual void copy_tensors(const std::vector<std::pair<int, int>>& from_to) = 0;
@@ -46,6 +50,7 @@ class StepBackend {
   virtual void get_adjoint(int tensor, std::vector<double>& all_items) const = 0;
   virtual void chain_adjoints(const std::vector<std::pair<int, int>>& from_to) = 0;
   virtual void run_adjoint() = 0;
+  virtual void run_adjoint_prefix(int op_count) = 0;
 };
 
 }  // namespace ssc

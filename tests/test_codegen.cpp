@@ -90,6 +90,38 @@ TEST(CodegenPlan, FusionAndCuts) {
   EXPECT_NE(plan.find(true, "stiffness_apply"), nullptr);
 }
 
+// A step no cost observes leaves the band extension out: its kernels are the forward plan's
+// tail and the adjoint plan's head, apart from every other op's, in every model's graph.
+TEST(CodegenPlan, TheExtensionIsATailOfBothPlans) {
+  TimestepModel every;
+  every.friction = true, every.region_count = 1, every.stiffness_gradient = true, every.air_drag = true;
+  TimestepModel implicit;
+  implicit.implicit_contact = true, implicit.updated_corotation = true, implicit.neo_hookean = true;
+  for (const TimestepModel& model : {TimestepModel{}, every, implicit}) {
+    const TimestepGraph t = build_timestep_graph(2, true, model);
+    ASSERT_EQ(t.extension_op, int(t.graph.ops().size()) - 1);
+    const KernelPlan plan = plan_kernels(t.graph);
+    const size_t f = plan.prefix_cut(false, t.extension_op), a = plan.prefix_cut(true, t.extension_op);
+    ASSERT_GT(f, 0u);
+    ASSERT_LT(f, plan.forward.size());
+    ASSERT_GT(a, 0u);
+    ASSERT_LT(a, plan.adjoint.size());
+    for (size_t i = 0; i < plan.forward.size(); ++i)
+      for (int o : plan.forward[i].ops) EXPECT_EQ(o == t.extension_op, i >= f) << plan.forward[i].name;
+    for (size_t i = 0; i < plan.adjoint.size(); ++i)
+      for (int o : plan.adjoint[i].ops) EXPECT_EQ(o == t.extension_op, i < a) << plan.adjoint[i].name;
+    EXPECT_EQ(plan.prefix_cut(false, int(t.graph.ops().size())), plan.forward.size());
+    EXPECT_EQ(plan.prefix_cut(true, int(t.graph.ops().size())), 0u);
+  }
+  // A cut through a fused kernel (the Lame parameters and the corotation share one) is refused.
+  const TimestepGraph t = build_timestep_graph(1, true);
+  const KernelPlan plan = plan_kernels(t.graph);
+  const PlannedKernel* fused = plan.find(false, "lame");
+  ASSERT_NE(fused, nullptr);
+  ASSERT_GE(fused->ops.size(), 2u);
+  EXPECT_THROW(plan.prefix_cut(false, fused->ops[1]), std::logic_error);
+}
+
 TEST(CodegenSource, NoAtomicsAndLineDirectives) {
   const TimestepGraph t = build_timestep_graph(1, true);
   const KernelPlan plan = plan_kernels(t.graph);

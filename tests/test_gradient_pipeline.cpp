@@ -436,6 +436,48 @@ TEST(GradientPipeline, AdjointMatchesCentralDifferencesPerParameter) {
   check_against_finite_differences(pipeline(), "sphere on tilted ground");
 }
 
+// The sphere observed at every third step only: the steps between run without the band
+// extension (models/sim/gradient.cpp), forward and adjoint.
+const Pipeline& sparse_pipeline() {
+  static const std::unique_ptr<Pipeline> p = [] {
+    std::unique_ptr<Pipeline> q =
+        build_pipeline(pipeline_scene_json(), Vec3(0.05, 0.3, -0.03), Vec3(1.3, 1.0, 1.5), Vec3(-1.7, 0.7, -0.6));
+    std::vector<ObservedFrame> kept;
+    for (ObservedFrame& f : q->frames)
+      if (f.step % 3 == 0) kept.push_back(std::move(f));
+    q->frames = std::move(kept);
+    return q;
+  }();
+  return *p;
+}
+
+TEST(GradientPipeline, SparseFramesAdjointMatchesCentralDifferencesPerParameter) {
+  check_against_finite_differences(sparse_pipeline(), "sphere observed every third step");
+}
+
+// Each observed frame's cost is the one of a run that extends the band at every step, and a
+// step without the extension leaves no band to read.
+TEST(GradientPipeline, StepsWithoutExtensionChangeNoObservedCost) {
+  const Pipeline& pl = sparse_pipeline();
+  ASSERT_EQ(pl.frames.size(), size_t(kSteps / 3));
+  Simulation sim(pl.scene, pl.grid, 1, true);
+  GradientOptions forward;
+  forward.gradient = false;
+  const CostGradient sparse = evaluate_cost_gradient(sim, *pl.cost, pl.frames, forward)[0];
+  Simulation every(pl.scene, pl.grid, 1, true);
+  for (size_t f = 0; f < pl.frames.size(); ++f) {
+    while (every.steps_taken() < pl.frames[f].step) every.step();
+    const FrameCost c = pl.cost->evaluate(pl.frames[f].points, pl.frames[f].weight, every.displacement(0),
+                                          every.band_displacement(0), nullptr, nullptr);
+    EXPECT_GT(c.cost, 0);
+    EXPECT_NEAR(sparse.frames[f].cost, c.cost, 1e-12 * c.cost) << "frame at step " << pl.frames[f].step;
+  }
+  every.step(true, false);
+  EXPECT_THROW(every.band_displacement(0), std::logic_error);
+  every.step();
+  EXPECT_NO_THROW(every.band_displacement(0));
+}
+
 TEST(GradientPipeline, FrictionAdjointMatchesCentralDifferencesPerParameter) {
   check_against_finite_differences(friction_pipeline(), "sphere sliding with friction");
 }

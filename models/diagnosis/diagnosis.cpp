@@ -186,6 +186,25 @@ FittedModel fit_control(const std::string& control, const Diagnosis& d, const Di
 // GPUs"), 72 s against 89 s one after the other on one H200 machine, the same diagnosis.json.
 constexpr int kFitsPerGpu = 2;
 
+// A fit's cost relative to the others', to start the costliest first: half the time step
+// doubles the steps; an interface search or several plane proposals fit many models; a
+// measurement correction is refitted only where it gains. From the timing case's log on
+// one H200 (docs/benchmarks.md, "Several GPUs").
+double schedule_weight(const std::string& name) {
+  if (name == "finer_step") return 5;
+  if (name == "finer_grid") return 2;
+  const ExtensionRow* row = find_extension(name);
+  if (!row) return 1;
+  switch (row->fit) {
+    case ExtensionRow::Fit::ProposedRegion: return 4;
+    case ExtensionRow::Fit::ModelSwitch: return 3;
+    case ExtensionRow::Fit::ProposedPlane: return 3;
+    case ExtensionRow::Fit::OffValue: return 1;
+    case ExtensionRow::Fit::Measurement: return 0.5;
+  }
+  return 1;
+}
+
 // Step 3 for every candidate the shared batch did not fit, in `order`, and the
 // discretization controls where asked for. On the GPU (with one rank) the fits run
 // side by side, kFitsPerGpu threads per GPU, each taking the next one; a fit's result does not
@@ -197,10 +216,13 @@ std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const Diagnos
                                                std::map<std::string, std::string>& skipped,
                                                const std::function<void(const std::string&)>& say) {
   std::vector<std::string> names;
-  if (c.options.discretization_controls)  // the costliest first
+  if (c.options.discretization_controls)
     for (const std::string& control : discretization_controls()) names.push_back(control);
   for (const std::string& name : order)
     if (!shared_fits.count(name) && !skipped.count(name)) names.push_back(name);
+  std::stable_sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+    return schedule_weight(a) > schedule_weight(b);
+  });
   std::vector<FittedModel> fits(names.size());
   std::vector<std::string> why(names.size());
   auto fit = [&](size_t k, const DiagnosisContext& on) {
@@ -216,7 +238,9 @@ std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const Diagnos
     }
     say((is_control(names[k]) ? "the base model, " + names[k] : names[k]) + " done");
   };
-  std::vector<int> gpus;  // a fit's thread each, on its GPU: kFitsPerGpu per GPU (SSC_FITS_PER_GPU=N: N)
+  // A fit's thread each, on its GPU: kFitsPerGpu per GPU (SSC_FITS_PER_GPU=N: N), the GPUs
+  // taking turns, so that the costliest fits start on different GPUs.
+  std::vector<int> gpus;
   if (runs_on_gpu(c.options.device) && ranks::count() == 1) {
     const char* per = std::getenv("SSC_FITS_PER_GPU");
     for (int k = 0, n = per ? std::max(1, std::atoi(per)) : kFitsPerGpu; k < n; ++k)
@@ -225,13 +249,13 @@ std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const Diagnos
   if (gpus.size() <= 1 || names.size() <= 1) {
     for (size_t k = 0; k < names.size(); ++k) fit(k, c);
   } else {
-    std::atomic<size_t> next{0};
+    std::atomic<size_t> next{gpus.size()};
     std::vector<std::thread> workers;
-    for (int g : gpus)
-      workers.emplace_back([&, g] {
+    for (size_t w = 0; w < gpus.size(); ++w)
+      workers.emplace_back([&, w] {
         DiagnosisContext on = c;
-        on.options.device = gpu_device(g);
-        for (size_t k = next++; k < names.size(); k = next++) fit(k, on);
+        on.options.device = gpu_device(gpus[w]);
+        for (size_t k = w; k < names.size(); k = next++) fit(k, on);  // thread w starts with fit w
       });
     for (std::thread& w : workers) w.join();
   }

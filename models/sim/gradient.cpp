@@ -60,6 +60,9 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
     frames_at.emplace(frame_steps[f], f);
   }
   const int K = choose_checkpoint_interval(sim, steps, options);
+  // Only an observed step needs the band extension (the cost reads its band, and its band
+  // cotangent is zero elsewhere); its warm start is then the last observed step's band.
+  auto extends = [&](int t) { return frames_at.count(t) > 0; };
 
   std::vector<CostGradient> results(B);
   for (auto& r : results) r.frames.resize(frame_steps.size());
@@ -105,9 +108,9 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
   take_frame_costs(0);
   for (int t = 1; t <= steps; ++t) {
     if (options.gradient && K == 0)
-      sim.step_and_keep(t);
+      sim.step_and_keep(t, extends(t));
     else
-      sim.step(false);
+      sim.step(false, extends(t));
     if (options.gradient && K > 0 && t % K == 0) checkpoint(t);
     if (frames_at.count(t) || t == steps) sim.sync_host();  // also checks for an explosion
     take_frame_costs(t);
@@ -132,12 +135,12 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
         const int base = ((t - 1) / K) * K;
         sim.load_checkpoint(base);
         for (int s = base + 1; s < t; ++s) {
-          sim.step(false);
+          sim.step(false, extends(s));
           checkpoint(s);
         }
       }
       sim.load_checkpoint(t - 1);
-      sim.recompute_step();
+      sim.recompute_step(extends(t));
       sim.drop_checkpoint(t - 1);  // no later (earlier-step) iteration needs it
       saved.erase(t - 1);
     }
@@ -156,7 +159,10 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
       backend.set_adjoint(tg.u, ub);
       backend.set_adjoint(tg.band_u, bb);
     }
-    backend.run_adjoint();
+    if (extends(t))
+      backend.run_adjoint();
+    else
+      backend.run_adjoint_prefix(tg.extension_op);
   }
   std::vector<std::vector<double>> v_bar(B, std::vector<double>(n3, 0.0));
   if (steps > 0) {  // the parameters' cotangents, accumulated where the steps ran

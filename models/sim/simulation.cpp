@@ -168,6 +168,7 @@ void Simulation::reset() {
     if (graph_.band_u >= 0) std::fill_n(st.data(graph_.band_u, b), 3 * grid_.band_count, 0.0);
   }
   steps_ = 0;
+  band_current_ = true;
   for (int b = 0; b < batch(); ++b) audits_[b].start(*this, b);
 }
 
@@ -207,22 +208,31 @@ void Simulation::check_states(const char* when) {
   throw SimulationError(message, failed);
 }
 
-void Simulation::step(bool to_host) { advance(to_host, -1); }
+void Simulation::step(bool to_host, bool extend) { advance(to_host, -1, extend); }
 
-void Simulation::step_and_keep(int key) { advance(false, key); }
+void Simulation::step_and_keep(int key, bool extend) { advance(false, key, extend); }
 
-void Simulation::advance(bool to_host, int keep_key) {
+void Simulation::run_step(bool extend) {
+  if (extend || graph_.extension_op < 0)
+    backend_->run();
+  else
+    backend_->run_prefix(graph_.extension_op);
+}
+
+void Simulation::advance(bool to_host, int keep_key, bool extend) {
   TensorStore<double>& st = interpreter_->store();
+  const bool band = graph_.band_u >= 0 && extend;
   try {
     if (!device_current_) backend_->upload(st);
     device_current_ = false;
-    backend_->run();
+    run_step(extend);
+    band_current_ = graph_.band_u < 0 || extend;
     if (keep_key >= 0) keep(keep_key, step_tensors(), steps_);
     if (to_host)
-      for (int t : {graph_.u, graph_.v, graph_.band_u, graph_.cg_iterations})
+      for (int t : {graph_.u, graph_.v, band ? graph_.band_u : -1, graph_.cg_iterations})
         if (t >= 0) backend_->download(st, t);
     std::vector<std::pair<int, int>> next = {{graph_.u, graph_.u_prev}, {graph_.v, graph_.v_prev}};
-    if (graph_.band_u >= 0) next.push_back({graph_.band_u, graph_.band_guess});
+    if (band) next.push_back({graph_.band_u, graph_.band_guess});
     backend_->copy_tensors(next);
     device_current_ = true;
   } catch (const SimulationError& e) {
@@ -237,7 +247,7 @@ void Simulation::advance(bool to_host, int keep_key) {
   for (int b = 0; b < batch(); ++b) {
     std::copy_n(st.data(graph_.u, b), 3 * grid_.node_count, st.data(graph_.u_prev, b));
     std::copy_n(st.data(graph_.v, b), 3 * grid_.node_count, st.data(graph_.v_prev, b));
-    if (graph_.band_u >= 0) std::copy_n(st.data(graph_.band_u, b), 3 * grid_.band_count, st.data(graph_.band_guess, b));
+    if (band) std::copy_n(st.data(graph_.band_u, b), 3 * grid_.band_count, st.data(graph_.band_guess, b));
   }
   check_states("step");
 }
@@ -274,6 +284,7 @@ void Simulation::keep(int key, const std::vector<int>& tensors, int step) {
   Kept& k = kept_[key];
   k.step = step;
   k.tensors = tensors;
+  k.band_current = band_current_;
   backend_->save_snapshot(key, tensors);
 }
 
@@ -286,6 +297,7 @@ void Simulation::restore(int key) {
   device_current_ = true;
   host_stale_ = true;
   steps_ = k.step;
+  band_current_ = k.band_current;
 }
 
 void Simulation::save_checkpoint(int key) {
@@ -310,15 +322,17 @@ void Simulation::clear_checkpoints() {
   kept_.clear();
 }
 
-void Simulation::recompute_step() {
+void Simulation::recompute_step(bool extend) {
   if (!device_current_) backend_->upload(interpreter_->store());
   device_current_ = true;
-  backend_->run();
+  run_step(extend);
 }
 
 Simulation::State Simulation::state(int b) const {
   State s;
-  const double *u = displacement(b), *v = velocity(b), *band = band_displacement(b);
+  require_host_state();
+  const double *u = displacement(b), *v = velocity(b);
+  const double* band = graph_.band_u >= 0 ? interpreter_->store().data(graph_.band_guess, b) : nullptr;
   s.u.assign(u, u + 3 * grid_.node_count);
   s.v.assign(v, v + 3 * grid_.node_count);
   if (band) s.band.assign(band, band + 3 * grid_.band_count);
@@ -338,6 +352,7 @@ void Simulation::set_state(int b, const State& s, int step) {
       std::copy(s.band.begin(), s.band.end(), st.data(graph_.band_guess, b));
   }
   steps_ = step;
+  band_current_ = true;
 }
 
 void Simulation::require_host_state() const {
@@ -354,6 +369,7 @@ const double* Simulation::velocity(int b) const {
 }
 const double* Simulation::band_displacement(int b) const {
   require_host_state();
+  if (!band_current_) throw std::logic_error("Simulation: the last step ran without the band extension");
   return graph_.band_u >= 0 ? interpreter_->store().data(graph_.band_guess, b) : nullptr;
 }
 

@@ -55,13 +55,16 @@ class Simulation {
   // sync_host() copies it back and checks it (an exploding simulation is reported there);
   // until then the state accessors below (displacement() and all built on it) throw
   // std::logic_error.
-  void step(bool to_host = true);
+  // extend = false leaves out the band extension (a step no cost observes): the band
+  // displacement then stays the last extended step's, and band_displacement() throws until
+  // a step extends again.
+  void step(bool to_host = true, bool extend = true);
   void sync_host();
   // step(false) that also keeps what the step read and computed (its states and
   // intermediates, all batch items) under key, where the steps run; load_step(key) puts
   // them back with the state before the step, so that the adjoint of that step can run
   // without recomputing it. step_bytes(): what one kept step holds.
-  void step_and_keep(int key);
+  void step_and_keep(int key, bool extend = true);
   void load_step(int key);
   size_t step_bytes() const;
   int steps_taken() const { return steps_; }
@@ -103,7 +106,7 @@ class Simulation {
   void set_state(int b, const State& s, int step);
   // Runs the step from the current state again without advancing (the adjoint's
   // recomputation of a step's intermediates), on whichever device runs the steps.
-  void recompute_step();
+  void recompute_step(bool extend = true);
   // Whole-batch state checkpoints under a key (the adjoint's stored steps), kept where the
   // steps run (device memory on the GPU); load_checkpoint restores the state and its step.
   // drop_checkpoint releases a checkpoint or a kept step, clear_checkpoints all of them.
@@ -128,7 +131,8 @@ class Simulation {
   void check_state(int b, const char* when = "step");
   void check_states(const char* when);  // every batch item  // when: how the error names the step
   void require_host_state() const;
-  void advance(bool to_host, int keep_key);
+  void advance(bool to_host, int keep_key, bool extend);
+  void run_step(bool extend);
   std::vector<int> state_tensors() const;  // u_prev, v_prev and, with extension, band_guess
   std::vector<int> step_tensors() const;   // every state and intermediate tensor
   void keep(int key, const std::vector<int>& tensors, int step);
@@ -145,9 +149,12 @@ class Simulation {
   // The backend holds a newer state than the host (step(false), load_checkpoint); for the
   // interpreter the two are one store, so only the checks wait for sync_host().
   bool host_stale_ = false;
+  // The band displacement is the current step's (the last step extended).
+  bool band_current_ = true;
   struct Kept {
     int step = 0;
     std::vector<int> tensors;
+    bool band_current = true;
   };
   std::map<int, Kept> kept_;  // checkpoints and kept steps by key
   std::vector<PhysicalParameters> params_;

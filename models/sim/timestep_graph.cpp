@@ -224,6 +224,7 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
   t.v = g.find_tensor("v");
   if (extension) {
     t.band_guess = g.add_state("band_guess", D::Band, 3);
+    t.extension_op = int(g.ops().size());
     g.add_op("extension_solve", {G("u", t.u), OpArg{"band_guess", t.band_guess, A::Opaque}},
              {{"band_u", "band_u", D::Band, 3}});
     t.band_u = g.find_tensor("band_u");

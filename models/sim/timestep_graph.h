@@ -16,6 +16,9 @@ struct TimestepGraph {
   // State read by the step and its successors written by it.
   int u_prev, v_prev, band_guess = -1;
   int u, v, band_u = -1, rotation, mass, lambda, mu, cg_iterations;
+  // The band extension's op, the graph's last (-1 without): a step no cost observes runs the
+  // ops before it alone (StepBackend::run_prefix).
+  int extension_op = -1;
 };
 
 struct Scene;

@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # ssc against the plain JAX implementation it must beat (issue 27), in one call on one GPU: the
 # peer's table phase on its dragon (forward and jax.grad, f64 and f32, batch 1 and 32) and ssc's
-# step benchmarks on the identical scene (the peer's ssc-scene-dragon.json: GpuForwardStep and
-# GpuAdjointStep, the CPU steps too), then the ratio table of docs/benchmarks.md.
+# step benchmarks on the identical scene (the peer's ssc-scene-dragon.json; the CPU steps too),
+# then the ratio table of docs/benchmarks.md. The peer has no band extension: its step is
+# ssc's unobserved step (GpuUnobserved{Forward,Adjoint}Step), which the ratios compare; the
+# observed step (GpuForwardStep, GpuAdjointStep: with the extension, once per observed frame
+# in a fit) is shown beside it.
 # Usage: tools/bench/peer-compare.sh BUILD_DIR PEER_DIR [OUT_DIR]
 #   PEER_DIR: a copy of the peer (bench.py, its grid files and ssc-scene-dragon.json with its .sdf)
 set -uo pipefail
@@ -24,18 +27,21 @@ ssc = {b["name"]: b for b in json.load(open(sys.argv[2]))["benchmarks"] if b.get
 def ms(name):  # ssc_bench reports milliseconds (Unit kMillisecond, real time)
     b = ssc.get(name)
     return b["real_time"] if b and not b.get("error_occurred") else float("nan")
-print("| dragon | JAX forward | ssc forward | ratio | JAX gradient | ssc fwd+adj | ratio | target (10x) fwd / grad |")
-print("|---|---|---|---|---|---|---|---|")
+print("| dragon | JAX forward | ssc forward | ratio | JAX gradient | ssc fwd+adj | ratio | target (10x) fwd / grad "
+      "| ssc observed step: fwd / fwd+adj |")
+print("|---|---|---|---|---|---|---|---|---|")
 for dtype, real in (("f64", "double"), ("f32", "float")):
     for batch in (1, 32):
         r = next((x for x in jax if x["dtype"] == dtype and x["batch"] == batch and x["scene"] == "dragon"), None)
         if not r:
             continue
-        f = ms(f"GpuForwardStep/peer-dragon/{real}/{batch}/real_time")
-        a = ms(f"GpuAdjointStep/peer-dragon/{real}/{batch}/real_time")
+        f = ms(f"GpuUnobservedForwardStep/peer-dragon/{real}/{batch}/real_time")
+        a = ms(f"GpuUnobservedAdjointStep/peer-dragon/{real}/{batch}/real_time")
+        of = ms(f"GpuForwardStep/peer-dragon/{real}/{batch}/real_time")
+        oa = ms(f"GpuAdjointStep/peer-dragon/{real}/{batch}/real_time")
         jf, jg = r["fwd_ms_per_step"], r["grad_ms_per_step"]
         print(f"| {dtype}, batch {batch} | {jf:.3f} ms | {f:.3f} ms | {jf / f:.2f}x | {jg:.3f} ms | {f + a:.3f} ms | "
-              f"{jg / (f + a):.2f}x | {jf / 10:.3f} / {jg / 10:.3f} ms |")
+              f"{jg / (f + a):.2f}x | {jf / 10:.3f} / {jg / 10:.3f} ms | {of:.3f} / {of + oa:.3f} ms |")
 for name in ("CpuForwardStep/peer-dragon/1", "CpuGradientStep/peer-dragon"):
     print(f"{name}: {ms(name):.2f} ms" if name in ssc else f"{name}: not run")
 PY
