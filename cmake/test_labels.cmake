@@ -20,7 +20,7 @@ set(SSC_TESTS_unit
   OpAdjointNodal OpAdjointPolar OpAdjointTrilinear OpChecks
   OptimBest OptimConvergence OptimFactory OptimRules OptimStopping ParameterSpaceNames ParameterSpaceTransforms
   ReconstructionStarts LevenbergMarquardt ParameterBounds
-  ExtensionTable PlausibleRanges DiagnosisModels RunRecord WriteErrors MeasurementCorrection SvgPlot
+  ExtensionTable PlausibleRanges DiagnosisModels DiagnosisNaming RunRecord WriteErrors MeasurementCorrection SvgPlot
   Layering OutputFolder ParameterNames ParameterTable Pcg BandFactor ReportHtml SceneFiles Units
   NvrtcCache NvrtcCompile ByteRecord BatchWorkers ComputeDevice
   RecordingReaders FrameTiming PlaneFit WorldFrame ScanRegistration MotionEstimate Segmentation ObjectSelection

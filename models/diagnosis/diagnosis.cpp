@@ -2,6 +2,7 @@
 #include "models/diagnosis/diagnosis.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <atomic>
@@ -17,6 +18,7 @@
 #include "models/diagnosis/interface_search.h"
 #include "models/diagnosis/measurement_fit.h"
 #include "models/diagnosis/model_fit.h"
+#include "models/diagnosis/naming.h"
 #include "models/diagnosis/score_test.h"
 #include "models/sim/compute_device.h"
 #include "models/sim/parameters.h"
@@ -298,11 +300,13 @@ std::vector<std::string> implausible_values(const FittedModel& m, double extent)
 void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) {
   const DiagnosisOptions& o = c.options;
   double discretization = 0;
+  const Diagnosis::Control* finest = nullptr;  // the control with the largest gain
   for (Diagnosis::Control& k : d.controls)
     if (!k.fit.failed && !k.fit.frame_costs.empty()) {
       const Gain g = cost_gain(d.base.frame_costs, k.fit.frame_costs, d.heldin_frames, -1, o.bootstrap, o.seed + 57);
       k.gain = g.value, k.gain_low = g.low, k.gain_high = g.high;
       discretization = std::max(discretization, g.value);
+      if (!finest || k.gain > finest->gain) finest = &k;
     }
   const size_t most = d.placebos.empty() ? 0 : d.placebos.back().extra.size();
   auto placebo_gain = [&](size_t extra) {
@@ -338,8 +342,23 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
     v.placebo_gain = std::max(0.0, placebo_gain(extra));
     v.discretization_gain = discretization;
     v.implausible = implausible_values(m, c.extent);
-    v.passes = v.gain >= o.min_gain && v.gain_low > std::max(v.placebo_gain, v.discretization_gain) + o.margin &&
-               v.implausible.empty();
+    const bool measurement = row && row->fit == ExtensionRow::Fit::Measurement;
+    const bool control_gained = finest && finest->gain > 0;
+    // A correction of the recording stands for nothing the model's discretization could: it is
+    // laid onto the finest control's fit (searched again on that motion), where it would pass
+    // the other bars, to see what it explains beyond it.
+    if (measurement && control_gained && v.gain >= o.min_gain && v.gain_low > v.placebo_gain + o.margin &&
+        v.implausible.empty()) {
+      try {
+        const FittedModel over = measurement_on(*row, finest->fit, c);
+        const Gain gc = cost_gain(finest->fit.frame_costs, over.frame_costs, d.heldin_frames, -1, o.bootstrap,
+                                  o.seed + 31 * i);
+        v.control_gain = gc.value, v.control_gain_low = gc.low;
+      } catch (const std::exception& e) {
+        v.warnings.push_back(std::string("not laid onto the ") + finest->fit.name + " control's motion: " + e.what());
+      }
+    }
+    v.passes = clears_bars(v, measurement, control_gained, o);
     if (v.passes) named.push_back(i);
     v.event_frame = events[i];
     if (!event_failures[i].empty()) v.warnings.push_back("the event's frame was not found: " + event_failures[i]);
@@ -352,7 +371,7 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
       }
     }
   }
-  std::sort(named.begin(), named.end(), [&](size_t a, size_t b) { return d.verdicts[a].gain > d.verdicts[b].gain; });
+  order_named(named, d.verdicts, &d.unjudged);
   if (!named.empty()) d.cause = d.verdicts[named[0]].name;
   for (size_t a = 0; a < named.size(); ++a)
     for (size_t b = a + 1; b < named.size(); ++b) {
@@ -482,13 +501,22 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
       d.lines.push_back(fmt::format("{}; with it corrected: {}", row->tell(m.values[m.values.size() - 1]), corrected));
     }
     if (!m.proposal.empty()) d.lines.push_back("proposed from the data: " + m.proposal);
+    if (!d.unjudged.empty())
+      d.lines.push_back(fmt::format("{} also passed, fitted to the frames as recorded: correct the recording and "
+                                    "diagnose again to judge {}",
+                                    fmt::join(d.unjudged, ", "), d.unjudged.size() == 1 ? "it" : "them"));
   }
   const Diagnosis::Control* finest = nullptr;  // the control with the largest gain
   for (const Diagnosis::Control& k : d.controls)
     if (!k.fit.failed && (!finest || k.gain > finest->gain)) finest = &k;
   for (size_t i = 0; i < d.verdicts.size() && finest; ++i) {
     const CandidateVerdict& v = d.verdicts[i];
-    if (!v.passes && v.implausible.empty() && v.gain >= o.min_gain && v.gain_low > v.placebo_gain + o.margin)
+    if (v.passes || !v.implausible.empty() || v.gain < o.min_gain || v.gain_low <= v.placebo_gain + o.margin) continue;
+    if (!std::isnan(v.control_gain))
+      d.lines.push_back(fmt::format("{} would remove {} of the held-out residual but is not named: beyond the base "
+                                    "model with {}, it removes {}",
+                                    v.name, percent(v.gain), finest->fit.proposal, percent(v.control_gain)));
+    else
       d.lines.push_back(fmt::format("{} would remove {} of the held-out residual but is not named: the base model with "
                                     "{} removes {}, so the model's own discretization can explain as much",
                                     v.name, percent(v.gain), finest->fit.proposal, percent(finest->gain)));

@@ -20,8 +20,12 @@
 // beats by `margin` both its placebo's gain and the discretization controls' (the base model
 // on half the cell size and on half the time step: what the model's own discretization
 // explains), and its fit stays inside every plausible range (a fit
-// at a range's end needs a value no physical object has: reported, not named); the cause is
-// the named candidate with the largest gain, or "none". Two named candidates whose gains differ
+// at a range's end needs a value no physical object has: reported, not named). A measurement
+// candidate stands for nothing the discretization could: instead of the controls' gain, its
+// correction laid onto the finest control's fit must gain as much over that fit. The cause is
+// a named measurement candidate if there is one (a physical candidate that passed beside it
+// was fitted to uncorrected frames: reported as unjudged), else the named candidate with the
+// largest gain, or "none". Two named candidates whose gains differ
 // by less than their difference's interval are reported as confounded. A candidate that fits
 // the held-in and the held-out frames as well as the base (both gains' intervals contain 0)
 // while it moves a base parameter is reported as undecided: these data cannot tell the two
@@ -49,6 +53,9 @@ struct CandidateVerdict {
   double gain = 0, gain_low = 0, gain_high = 0;  // fraction of the base's held-out cost removed
   double placebo_gain = 0;
   double discretization_gain = 0;  // the largest discretization control's gain, the other bar it must beat
+  // A measurement candidate's bar instead: the gain of its correction over the finest control's
+  // fit, laid onto that fit's motion (NaN where there is no control).
+  double control_gain = std::numeric_limits<double>::quiet_NaN(), control_gain_low = std::numeric_limits<double>::quiet_NaN();
   double score = std::numeric_limits<double>::quiet_NaN();  // predicted relative held-in decrease
   bool passes = false;
   // The frames after the event the extension is about (the first contact with any plane; with
@@ -78,6 +85,9 @@ struct Diagnosis {
   };
   std::vector<Control> controls;
   std::string cause = "none";
+  // Physical candidates that passed beside a measurement cause: fitted to the frames as
+  // recorded, they are judged once the recording is corrected.
+  std::vector<std::string> unjudged;
   std::vector<std::pair<std::string, std::string>> confounded;
   ParameterCorrelation identifiability;  // at the cause's fit (empty names: not assessed)
   // Pairs of parameters whose correlation there is at least 0.95 in size, with it.

@@ -43,6 +43,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
       c["gain_high"] = v.gain_high;
       c["placebo_gain"] = v.placebo_gain;
       c["discretization_gain"] = v.discretization_gain;
+      if (!std::isnan(v.control_gain)) c["control_gain"] = {v.control_gain, v.control_gain_low};
       c["passes"] = v.passes;
       c["extra_parameters"] = named(m, true, &base);
       nlohmann::json before = nlohmann::json::object(), after = nlohmann::json::object();
@@ -95,6 +96,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   j["discretization_controls"] = controls;
   j["undecided"] = nlohmann::json::array();
   for (const auto& [candidate, what] : d.undecided) j["undecided"].push_back({{"candidate", candidate}, {"base", what}});
+  j["unjudged"] = d.unjudged;
   j["confounded"] = nlohmann::json::array();
   for (const auto& [a, b] : d.confounded) j["confounded"].push_back({a, b});
   nlohmann::json id;

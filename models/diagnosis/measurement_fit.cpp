@@ -8,6 +8,8 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <memory>
+#include <tuple>
 
 #include "models/cost/surface_constraint.h"
 #include "models/sim/compute_device.h"
@@ -51,7 +53,7 @@ MotionTrack track_motion(const Problem& p, const PhysicalParameters& params, con
   t.u[0].assign(sim.displacement(0), sim.displacement(0) + nu);
   t.band[0].assign(nb, 0.0);
   for (int k = 1; k <= last_step; ++k) {
-    sim.step();
+    sim.step(keep[size_t(k)] != 0, keep[size_t(k)] != 0);  // the band at the kept steps alone
     if (!keep[size_t(k)]) continue;
     t.u[size_t(k)].assign(sim.displacement(0), sim.displacement(0) + nu);
     t.band[size_t(k)].assign(sim.band_displacement(0), sim.band_displacement(0) + nb);
@@ -152,79 +154,71 @@ void apply_measurement(Problem& p, const MeasurementCorrection& m, const std::st
   for (const ObservedFrame& f : p.frames) p.scene.time.steps = std::max(p.scene.time.steps, f.step);
 }
 
-FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, const DiagnosisContext& c,
-                            std::vector<std::map<std::string, double>>& base_starts) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const std::string parameter = row.parameters(base.problem.scene).at(0);
-  const Problem& recorded = base.problem;
+namespace {
+
+// What a correction is searched over: its parameter, its range, the steps whose states the
+// search needs, the held-in frames' points and their cost.
+struct CorrectionSearch {
+  std::string parameter;
+  double lo = 0, hi = 0;
+  std::vector<char> keep;
+  std::vector<std::vector<CameraPoints>> points;
+  std::unique_ptr<SurfaceConstraintCost> cost;
+};
+
+CorrectionSearch correction_search(const ExtensionRow& row, const Problem& recorded, const DiagnosisContext& c) {
+  CorrectionSearch s;
+  s.parameter = row.parameters(recorded.scene).at(0);
   const double dt = recorded.scene.time.dt;
-  auto [lo, hi] = plausible_range(recorded.scene, parameter, c.extent);
+  std::tie(s.lo, s.hi) = plausible_range(recorded.scene, s.parameter, c.extent);
   int last_step = 0;
   for (int f = 0; f < c.heldin && f < int(recorded.frames.size()); ++f)
     last_step = std::max(last_step, recorded.frames[size_t(f)].step);
-  const bool clock = parameter == "camera.time_offset";
+  const bool clock = s.parameter == "camera.time_offset";
   if (clock) {
     // No frame may move before the start; the motion is tracked as far as the latest frame can go.
-    lo = std::max(lo, -recorded.frames.front().step * dt);
-    last_step += int(std::ceil(hi / dt)) + 1;
+    s.lo = std::max(s.lo, -recorded.frames.front().step * dt);
+    last_step += int(std::ceil(s.hi / dt)) + 1;
   }
-  std::vector<char> keep(size_t(last_step) + 1, clock ? 1 : 0);
-  for (int f = 0; f < c.heldin && f < int(recorded.frames.size()); ++f) keep[size_t(recorded.frames[size_t(f)].step)] = 1;
-  const SurfaceConstraintCost cost(recorded.grid, recorded.phi_max);
-  const std::vector<std::vector<CameraPoints>> points = camera_points(recorded.observations, c.heldin);
+  s.keep.assign(size_t(last_step) + 1, clock ? 1 : 0);
+  for (int f = 0; f < c.heldin && f < int(recorded.frames.size()); ++f) s.keep[size_t(recorded.frames[size_t(f)].step)] = 1;
+  s.cost = std::make_unique<SurfaceConstraintCost>(recorded.grid, recorded.phi_max);
+  s.points = camera_points(recorded.observations, c.heldin);
+  return s;
+}
 
-  FittedModel fm = base;
-  fm.name = row.name;
-  fm.extra = {parameter};
-  fm.note.clear();
-  fm.proposal.clear();
-  double value = row.off_value;
-  for (int refit = 0;; ++refit) {
-    // The motion the frames are laid onto: the current fit's, and at the first round also the
-    // scene's nominal one (a wrong clock or scale can drive the base fit far off, even to a
-    // run the energy audit stops); the better of them.
-    std::vector<PhysicalParameters> motions = {with_values(recorded.scene, fm.names, fm.values)};
-    if (refit == 0) motions.push_back(PhysicalParameters::from_scene(recorded.scene));
-    double before = 0, next = value, best = std::numeric_limits<double>::infinity();
-    std::string failure;
-    for (const PhysicalParameters& motion : motions) {
-      MotionTrack track;
-      try {
-        track = track_motion(recorded, motion, keep, c.options.device);
-      } catch (const SimulationError& e) {
-        failure = e.what();
-        continue;
-      }
-      auto J = [&](double v) { return held_in_cost(recorded, points, parameter, v, track, cost); };
-      const double x = search(J, lo, hi), cost_x = J(x);
-      if (cost_x < best) best = cost_x, next = x, before = J(value);
+struct Found {
+  double value = 0;          // the correction with the lowest held-in cost
+  double before = 0, after = 0;  // the held-in cost at the value searched from, and at `value`
+};
+
+// The correction that best lays the held-in frames onto the better of `motions`.
+Found search_correction(const CorrectionSearch& s, const Problem& recorded, const std::vector<PhysicalParameters>& motions,
+                        double from, const std::string& device) {
+  Found found{from, 0, std::numeric_limits<double>::infinity()};
+  std::string failure;
+  for (const PhysicalParameters& motion : motions) {
+    MotionTrack track;
+    try {
+      track = track_motion(recorded, motion, s.keep, device);
+    } catch (const SimulationError& e) {
+      failure = e.what();
+      continue;
     }
-    if (!std::isfinite(best)) throw SimulationError("no motion to lay the frames onto: " + failure);
-    const double gain = before > 0 ? 1 - best / before : 0;
-    const bool moved = std::abs(next - value) > 1e-3 * (hi - lo);
-    value = next;
-    if (refit == kMostRefits || gain < kRefitGain || (refit > 0 && !moved)) {
-      if (refit == 0)
-        fm.note = fmt::format("fitted with the base model's physics: the correction removes {:.1f} % of the held-in "
-                              "cost, below the {:.0f} % worth a refit",
-                              100 * gain, 100 * kRefitGain);
-      break;
-    }
-    ModelSpec spec{row.name};
-    const MeasurementCorrection m = measurement_correction(parameter, value);
-    spec.adjust = [m, dir = c.observations](Problem& q) { apply_measurement(q, m, dir); };
-    FittedModel refitted = fit_together({spec}, c, base_starts)[0];
-    if (refitted.failed) {
-      fm.note = "the refit with the corrected frames failed: " + refitted.failure;
-      break;
-    }
-    fm = std::move(refitted);
-    fm.name = row.name;
-    fm.extra = {parameter};
+    auto J = [&](double v) { return held_in_cost(recorded, s.points, s.parameter, v, track, *s.cost); };
+    const double x = search(J, s.lo, s.hi), cost_x = J(x);
+    if (cost_x < found.after) found = {x, J(from), cost_x};
   }
-  if (clock) value = std::round(value / dt) * dt;
-  // The model as scored: the corrected frames with the parameters it ends with.
-  fm.problem = base.problem;
+  if (!std::isfinite(found.after)) throw SimulationError("no motion to lay the frames onto: " + failure);
+  return found;
+}
+
+// `fm` as scored: `model`'s problem with its frames corrected by `value`, their costs at fm's
+// parameters, and the correction as its last parameter.
+void score_corrected(FittedModel& fm, const Problem& problem, const std::string& parameter, double value,
+                     const DiagnosisContext& c) {
+  if (parameter == "camera.time_offset") value = std::round(value / problem.scene.time.dt) * problem.scene.time.dt;
+  fm.problem = problem;
   apply_measurement(fm.problem, measurement_correction(parameter, value), c.observations);
   PhysicalParameters held = with_values(fm.problem.scene, fm.names, fm.values);
   fm.frame_costs = per_frame_costs(fm.problem, held, c.options.device);
@@ -234,6 +228,67 @@ FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, co
   fm.names.push_back(parameter);
   fm.values.conservativeResize(fm.values.size() + 1);
   fm.values[fm.values.size() - 1] = value;
+}
+
+}  // namespace
+
+FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, const DiagnosisContext& c,
+                            std::vector<std::map<std::string, double>>& base_starts) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Problem& recorded = base.problem;
+  const CorrectionSearch s = correction_search(row, recorded, c);
+  FittedModel fm = base;
+  fm.name = row.name;
+  fm.extra = {s.parameter};
+  fm.note.clear();
+  fm.proposal.clear();
+  double value = row.off_value;
+  for (int refit = 0;; ++refit) {
+    // The motion the frames are laid onto: the current fit's, and at the first round also the
+    // scene's nominal one (a wrong clock or scale can drive the base fit far off, even to a
+    // run the energy audit stops); the better of them.
+    std::vector<PhysicalParameters> motions = {with_values(recorded.scene, fm.names, fm.values)};
+    if (refit == 0) motions.push_back(PhysicalParameters::from_scene(recorded.scene));
+    const Found found = search_correction(s, recorded, motions, value, c.options.device);
+    const double gain = found.before > 0 ? 1 - found.after / found.before : 0;
+    const bool moved = std::abs(found.value - value) > 1e-3 * (s.hi - s.lo);
+    value = found.value;
+    if (refit == kMostRefits || gain < kRefitGain || (refit > 0 && !moved)) {
+      if (refit == 0)
+        fm.note = fmt::format("fitted with the base model's physics: the correction removes {:.1f} % of the held-in "
+                              "cost, below the {:.0f} % worth a refit",
+                              100 * gain, 100 * kRefitGain);
+      break;
+    }
+    ModelSpec spec{row.name};
+    const MeasurementCorrection m = measurement_correction(s.parameter, value);
+    spec.adjust = [m, dir = c.observations](Problem& q) { apply_measurement(q, m, dir); };
+    FittedModel refitted = fit_together({spec}, c, base_starts)[0];
+    if (refitted.failed) {
+      fm.note = "the refit with the corrected frames failed: " + refitted.failure;
+      break;
+    }
+    fm = std::move(refitted);
+    fm.name = row.name;
+    fm.extra = {s.parameter};
+  }
+  score_corrected(fm, base.problem, s.parameter, value, c);
+  fm.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return fm;
+}
+
+FittedModel measurement_on(const ExtensionRow& row, const FittedModel& model, const DiagnosisContext& c) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const CorrectionSearch s = correction_search(row, model.problem, c);
+  const Found found =
+      search_correction(s, model.problem, {with_values(model.problem.scene, model.names, model.values)}, row.off_value,
+                        c.options.device);
+  FittedModel fm = model;
+  fm.name = row.name;
+  fm.extra = {s.parameter};
+  fm.note.clear();
+  fm.proposal.clear();
+  score_corrected(fm, model.problem, s.parameter, found.value, c);
   fm.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return fm;
 }

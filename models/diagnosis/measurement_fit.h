@@ -30,4 +30,9 @@ void apply_measurement(Problem& p, const MeasurementCorrection& m, const std::st
 FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, const DiagnosisContext& c,
                             std::vector<std::map<std::string, double>>& base_starts);
 
+// The correction searched on another model's motion (its problem and fitted values: a
+// discretization control's), with that model's physics: what of the residual it leaves the
+// measurement explains. The result is scored like fit_measurement's, without a refit.
+FittedModel measurement_on(const ExtensionRow& row, const FittedModel& model, const DiagnosisContext& c);
+
 }  // namespace ssc

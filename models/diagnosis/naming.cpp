@@ -1,0 +1,38 @@
+// The naming rule of `ssc diagnose` (see naming.h).
+#include "models/diagnosis/naming.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "models/sim/extensions.h"
+
+namespace ssc {
+namespace {
+
+bool is_measurement(const std::string& name) {
+  const ExtensionRow* row = find_extension(name);
+  return row && row->fit == ExtensionRow::Fit::Measurement;
+}
+
+}  // namespace
+
+bool clears_bars(const CandidateVerdict& v, bool measurement, bool control_gained, const DiagnosisOptions& o) {
+  const bool over_placebo = v.gain >= o.min_gain && v.gain_low > v.placebo_gain + o.margin && v.implausible.empty();
+  if (measurement && control_gained)  // NaN (not laid onto the control) fails
+    return over_placebo && v.control_gain >= o.min_gain && v.control_gain_low > v.placebo_gain + o.margin;
+  return over_placebo && v.gain_low > v.discretization_gain + o.margin;
+}
+
+void order_named(std::vector<size_t>& named, const std::vector<CandidateVerdict>& verdicts,
+                 std::vector<std::string>* unjudged) {
+  std::sort(named.begin(), named.end(), [&](size_t a, size_t b) {
+    const bool ma = is_measurement(verdicts[a].name), mb = is_measurement(verdicts[b].name);
+    if (ma != mb) return ma;
+    return verdicts[a].gain > verdicts[b].gain;
+  });
+  if (unjudged && !named.empty() && is_measurement(verdicts[named[0]].name))
+    for (size_t k : named)
+      if (!is_measurement(verdicts[k].name)) unjudged->push_back(verdicts[k].name);
+}
+
+}  // namespace ssc
