@@ -162,8 +162,9 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
     const std::string fits = specs.size() == 1 ? specs[0].name
                                                : fmt::format("{} and {} more", specs[0].name, specs.size() - 1);
     told = [&c, fits, iterations = o.iterations](int round, int active, double best, const Eigen::VectorXd&) {
-      c.round_progress(fmt::format("{}: round {} of at most {}, {} starts going on, best held-in cost {:.4g}", fits, round,
-                                   iterations, active, best));
+      c.round_progress(fmt::format("{}: evaluation round {} (each start at most {} iterations), {} starts going on, "
+                                   "best held-in cost {:.4g}",
+                                   fits, round, iterations, active, best));
     };
   }
   const ReconstructionResult r = reconstruct(held_in(shared, c.heldin), ro, told);
