@@ -92,8 +92,9 @@ std::vector<ModelSpec> plane_proposals(const FittedModel& base, int heldin, int 
   directions.push_back(-up);
   const size_t D = directions.size();
   // Per direction: the gap (simulated extreme - observed extreme) in the first observed frame,
-  // and the largest gap beyond it with the observed extreme of that frame.
-  std::vector<double> first_gap(D, std::nan("")), over(D, 0), observed_at(D, 0);
+  // the largest gap beyond it, and the farthest the observed body reached: a surface stops it
+  // there, and it may come back before the gap is largest (a wall it bounced off).
+  std::vector<double> first_gap(D, std::nan("")), over(D, 0), reach(D, -1e300), observed_at(D, 0);
   Simulation sim(p.scene, p.grid, 1, false);
   sim.set_parameters(0, params);
   int step = 0;
@@ -112,9 +113,11 @@ std::vector<ModelSpec> plane_proposals(const FittedModel& base, int heldin, int 
       }
       const double gap = simulated - observed;
       if (std::isnan(first_gap[d])) first_gap[d] = gap;
-      if (gap - first_gap[d] > over[d]) over[d] = gap - first_gap[d], observed_at[d] = observed + first_gap[d];
+      over[d] = std::max(over[d], gap - first_gap[d]);
+      reach[d] = std::max(reach[d], observed);
     }
   }
+  for (size_t d = 0; d < D; ++d) observed_at[d] = reach[d] + (std::isnan(first_gap[d]) ? 0 : first_gap[d]);
   // A plane facing as one of the scene's does is that plane's offset, not a second surface.
   auto new_surface = [&](size_t d) {
     return std::none_of(p.scene.planes.begin(), p.scene.planes.end(), [&](const PlaneSpec& plane) {
