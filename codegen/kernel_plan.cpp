@@ -4,8 +4,8 @@
 #include <fmt/format.h>
 
 #include <regex>
-#include <stdexcept>
 #include <set>
+#include <stdexcept>
 
 #include "codegen/cuda_source.h"
 #include "codegen/sha256.h"

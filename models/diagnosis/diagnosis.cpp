@@ -191,7 +191,7 @@ constexpr int kFitsPerGpu = 2;
 // A fit's cost relative to the others', to start the costliest first: half the time step
 // doubles the steps; an interface search or several plane proposals fit many models; a
 // measurement correction is refitted only where it gains. From the timing case's log on
-// one H200 (docs/benchmarks.md, "Several GPUs").
+// two H200 (docs/benchmarks.md, "Several GPUs").
 double schedule_weight(const std::string& name) {
   if (name == "finer_step") return 5;
   if (name == "finer_grid") return 2;
