@@ -43,33 +43,11 @@
 
 #include "models/diagnosis/fitted_model.h"
 #include "models/diagnosis/identifiability.h"
+#include "models/diagnosis/naming.h"
 #include "models/sim/extensions.h"
 #include "models/sim/problem.h"
 
 namespace ssc {
-
-struct CandidateVerdict {
-  std::string name;
-  double gain = 0, gain_low = 0, gain_high = 0;  // fraction of the base's held-out cost removed
-  double placebo_gain = 0;
-  double discretization_gain = 0;  // the largest discretization control's gain, the other bar it must beat
-  // A measurement candidate's bar instead: the gain of its correction over the finest control's
-  // fit, laid onto that fit's motion (NaN where there is no control).
-  double control_gain = std::numeric_limits<double>::quiet_NaN(), control_gain_low = std::numeric_limits<double>::quiet_NaN();
-  double score = std::numeric_limits<double>::quiet_NaN();  // predicted relative held-in decrease
-  bool passes = false;
-  // The frames after the event the extension is about (the first contact with any plane; with
-  // the added plane for second_plane; frame 0 for air drag), held-in part: the fraction of the
-  // base's cost removed there, and the Akaike difference n ln(RSS / RSS_base) + 2 k over its n
-  // observed points (negative favours the extension; k its extra parameters). -1: no event.
-  int event_frame = -1;
-  double event_gain = std::numeric_limits<double>::quiet_NaN();
-  double event_aic = std::numeric_limits<double>::quiet_NaN();
-  // The fit's parameters at an end of their plausible range ("air_drag = 1.5 kg/m^3 at the
-  // upper end of its plausible range [0, 1.5] (air: ...)"): such a candidate is not named.
-  std::vector<std::string> implausible;
-  std::vector<std::string> warnings;
-};
 
 struct Diagnosis {
   int heldin_frames = 0, heldout_frames = 0;
