@@ -2,7 +2,6 @@
 #include "models/diagnosis/naming.h"
 
 #include <algorithm>
-#include <cmath>
 
 #include "models/sim/extensions.h"
 
