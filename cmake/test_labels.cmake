@@ -20,7 +20,7 @@ set(SSC_TESTS_unit
   OpAdjointNodal OpAdjointPolar OpAdjointTrilinear OpChecks
   OptimBest OptimConvergence OptimFactory OptimRules OptimStopping ParameterSpaceNames ParameterSpaceTransforms
   ReconstructionStarts LevenbergMarquardt ParameterBounds
-  ExtensionTable PlausibleRanges DiagnosisModels DiagnosisNaming RunRecord WriteErrors MeasurementCorrection SvgPlot
+  ExtensionTable PlausibleRanges DiagnosisModels DiagnosisNaming SupportedSpan RunRecord WriteErrors MeasurementCorrection SvgPlot
   Layering OutputFolder ParameterNames ParameterTable Pcg BandFactor ReportHtml SceneFiles Units
   NvrtcCache NvrtcCompile ByteRecord BatchWorkers ComputeDevice
   RecordingReaders FrameTiming PlaneFit WorldFrame ScanRegistration MotionEstimate Segmentation ObjectSelection
@@ -31,7 +31,7 @@ set(SSC_TESTS_physics
   PhysicsBatch PhysicsBounce PhysicsCantilever PhysicsFreeFall PhysicsGrid PhysicsRigidMotion StiffContact
   EnergyAudit MatchCheck RunChecks BatchEvaluation
   ReconstructionEndToEnd ReconstructionFailures ReconstructionLeastSquares
-  FrameTimes FrictionSlope GoodnessOfFit PlaneProposals RestingStart TablePoints CalculixDrops PrepareSynthetic PrepareRealRecording
+  FrameTimes FrictionSlope GoodnessOfFit ParameterSlices PlaneProposals RestingStart TablePoints CalculixDrops PrepareSynthetic PrepareRealRecording
   GpuForward.ExplodingGradientFailsCleanlyOnTheCpu GpuKernels.RandomStateAndEveryAdjointGroupOnTheCpu)
 
 set(SSC_TESTS_cli

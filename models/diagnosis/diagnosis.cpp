@@ -462,6 +462,37 @@ void identifiability_at(Diagnosis& d, const FittedModel& m, const Problem* share
     }
 }
 
+// The rise of the held-in cost, as a fraction of the cause's fitted cost, within which a value
+// of one of its parameters counts as fitting as well as the fitted one. (Not a fraction of the
+// cause's gain: a cube at rest on a slope gains 150 times its fitted cost by friction, and a
+// friction that lets it creep costs 150 times as much again: tests/test_parameter_slices.cpp.)
+constexpr double kSliceTolerance = 0.05;
+
+// Step 6b: the held-in cost along each of the cause's own simulation parameters (the others
+// at the fit) out to the ends of its plausible range, four probes a side, as one batch.
+void slices_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const DiagnosisContext& c) {
+  const Problem& problem = shared ? *shared : m.problem;
+  PhysicalParameters at = PhysicalParameters::from_scene(problem.scene);
+  const std::map<std::string, double> base = values_by_name(d.base);
+  std::vector<std::string> names;
+  std::vector<std::pair<double, double>> ranges;
+  std::vector<bool> log_scale;
+  for (size_t i = 0; i < m.names.size(); ++i) {
+    const std::string& n = m.names[i];
+    if (is_measurement_parameter(n)) continue;
+    set_parameter(at, n, m.values[Eigen::Index(i)]);
+    if (base.count(n)) continue;
+    const auto [lo, hi] = plausible_range(m.problem.scene, n, c.extent);
+    if (!std::isfinite(lo) && !std::isfinite(hi)) continue;
+    names.push_back(n);
+    ranges.emplace_back(lo, hi);
+    log_scale.push_back(lo > 0 && hi / lo > 100);
+  }
+  if (names.empty()) return;
+  d.slices = slice_parameters(held_in(problem, d.heldin_frames), at, names, ranges, log_scale, kSliceTolerance, 4,
+                              c.options.device);
+}
+
 // Step 7: what to tell the user.
 void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& named) {
   const std::map<std::string, double> base_values = values_by_name(d.base);
@@ -540,6 +571,20 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
       d.lines.push_back(fmt::format("{} and {}: correlation {:+.3f} at the fit (Gauss-Newton): the data fix a "
                                     "combination of them, not each",
                                     a, b, r));
+  for (const ParameterSlice& s : d.slices) {
+    if (!s.open_low && !s.open_high) continue;
+    const std::string span = fmt::format("from {} to {}", with_unit(s.name, s.low), with_unit(s.name, s.high));
+    const std::string within = fmt::format("the held-in cost stays within {} of the fit's", percent(kSliceTolerance));
+    if (s.open_low && s.open_high)
+      d.lines.push_back(fmt::format("{}: not fixed by the data: {} (its whole plausible range) {}", s.name, span, within));
+    else
+      d.lines.push_back(fmt::format("{}: the data fix only {} bound, {} {}: {} ({} the end of its plausible range) "
+                                    "{}; the fitted {} is one value of that plateau",
+                                    s.name, s.open_high ? "a lower" : "an upper", s.open_high ? ">=" : "<=",
+                                    with_unit(s.name, s.open_high ? s.low : s.high), span,
+                                    s.open_high ? with_unit(s.name, s.high) : with_unit(s.name, s.low), within,
+                                    with_unit(s.name, s.fitted)));
+  }
   if (!named.empty() && !d.identifiability.failure.empty())
     d.lines.push_back("identifiability not assessed: " + d.identifiability.failure);
   if (d.confounded.empty() && d.identifiability.correlation.rows() >= 2) {
@@ -684,6 +729,7 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   }
 
   std::vector<size_t> named;
+  std::string slices_failure;
   say("judging the candidates");
   judge(d, c, named);
   find_undecided(d, c);
@@ -695,8 +741,15 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
     } catch (const std::exception& e) {
       d.identifiability.failure = e.what();
     }
+    say("the held-in cost along the " + m.name + " fit's parameters");
+    try {
+      slices_at(d, m, shared_fits.count(m.name) ? &shared_problem : nullptr, c);
+    } catch (const std::exception& e) {
+      slices_failure = e.what();
+    }
   }
   tell(d, o, named);
+  if (!slices_failure.empty()) d.lines.push_back("the held-in cost along the cause's parameters failed: " + slices_failure);
   d.seconds = seconds_since(t0);
   return d;
 }

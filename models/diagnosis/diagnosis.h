@@ -16,6 +16,7 @@
 //   score_test.h       a ranking of the candidates with an "off" value from one backward pass
 //   held_out.h         the gain on the held-out frames with a bootstrap interval; the event
 //   identifiability.h  which parameters trade one for the other at the cause's fit
+//   parameter_slices.h which of the cause's parameters the data fix only from one side
 // A candidate is named when its held-out gain is at least `min_gain`, its interval's lower end
 // beats by `margin` both its placebo's gain and the discretization controls' (the base model
 // on half the cell size and on half the time step: what the model's own discretization
@@ -44,6 +45,7 @@
 #include "models/diagnosis/fitted_model.h"
 #include "models/diagnosis/identifiability.h"
 #include "models/diagnosis/naming.h"
+#include "models/diagnosis/parameter_slices.h"
 #include "models/sim/extensions.h"
 #include "models/sim/problem.h"
 
@@ -74,6 +76,9 @@ struct Diagnosis {
   // between the two by more than 10 %: (candidate, "youngs_modulus 8.1 kPa with the base model,
   // 5.2 kPa with nonlinear_material").
   std::vector<std::pair<std::string, std::string>> undecided;
+  // The held-in cost along each of the cause's own parameters out to its plausible range's
+  // ends (parameter_slices.h): a span open at one end means the data fix only a bound.
+  std::vector<ParameterSlice> slices;
   std::vector<std::string> lines;  // what to tell the user
   double seconds = 0;
 };

@@ -112,6 +112,10 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   id["indistinguishable"] = nlohmann::json::array();
   for (const auto& [a, b, r] : d.indistinguishable) id["indistinguishable"].push_back({{"a", a}, {"b", b}, {"correlation", r}});
   j["identifiability"] = id;
+  j["slices"] = nlohmann::json::array();
+  for (const ParameterSlice& s : d.slices)
+    j["slices"].push_back({{"parameter", s.name}, {"fitted", s.fitted}, {"values", s.values}, {"costs", s.costs},
+                           {"low", s.low}, {"high", s.high}, {"open_low", s.open_low}, {"open_high", s.open_high}});
   j["lines"] = d.lines;
   j["seconds"] = d.seconds;
   return j;

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """CalculiX (ccx 2.20) drop scenes: an independent source of depth observations.
 
-For each case this writes a dynamic ccx deck of a deformable box dropped or thrown
+For each case this writes a dynamic ccx deck of a deformable box (or a cylinder) dropped or thrown
 onto one or two rigid planes, runs it, turns the body's surface at 60 Hz frames into
 PLY meshes, and writes the matching ssc scene (scene.json) and cameras.  With
 --render it then calls `ssc render` to make the observation folder.  Standard library
@@ -142,9 +142,26 @@ CASES = {
         E=5e4, planes=[(TILT, 0.0, 0.0, None), (90.0, 180.0, -0.45, None)], gap=0.04,
         velocity=(1.5, -1.0, 0.0), duration=0.5),
     "neo_hookean": dict(
-        what="a soft Neo-Hookean cube (E = 10 kPa) thrown hard onto the incline: large strain",
-        E=1e4, neo_hookean=True, planes=[(TILT, 0.0, 0.0, None)], gap=0.04, velocity=(0.3, -3.0, 0.0),
+        what="a soft Neo-Hookean cube (E = 10 kPa) thrown hard onto the incline: large strain (at 3 m/s ccx "
+             "stopped at t = 0.095 s, its increment below the minimum)",
+        E=1e4, neo_hookean=True, planes=[(TILT, 0.0, 0.0, None)], gap=0.04, velocity=(0.3, -2.0, 0.0),
         duration=0.35, min_increment=1e-6),
+    "floor_below": dict(
+        what="cube thrown down a frictionless 20 degree incline onto the flat floor it ends on, 0.15 m below "
+             "(a second plane below the body)",
+        E=5e4, planes=[(TILT, 0.0, 0.0, None), (0.0, 0.0, -0.15, None)], gap=0.04, velocity=(1.2, -1.0, 0.0),
+        duration=0.45),
+    "cylinder_wall": dict(
+        what="a cylinder (radius 0.1 m, 0.2 m long, lying on its side) thrown down a frictionless 30 degree "
+             "incline into a wall facing -x at x = 0.5 m",
+        E=5e4, shape="cylinder", planes=[(30.0, 0.0, 0.0, None), (90.0, 180.0, -0.5, None)], gap=0.04,
+        velocity=(1.5, -1.0, 0.0), duration=0.45, min_increment=1e-6),
+    "brick_friction": dict(
+        what="the brick (0.3 x 0.1 x 0.2 m) lying flat on the 20 degree incline with Coulomb friction mu = 0.3, "
+             "launched down it at 1.2 m/s (pressed in by its static 5 um, 461 Pa over 1e8 N/m^3): it speeds up "
+             "at g (sin a - mu cos a) = 0.59 m/s^2",
+        E=8e4, half=(0.15, 0.05, 0.1), planes=[(TILT, 0.0, 0.0, 0.3)], gap=-5e-6, velocity=SLIDE, duration=0.2,
+        min_increment=1e-6),
 }
 
 
@@ -269,8 +286,16 @@ def body_mesh(case, elements):
     R, centre = body_pose(case)
     h = half_extents(case)  # elements per edge: `elements` per 0.2 m
     mesh = references.BoxMesh(tuple(-x for x in h), h, tuple(max(1, round(elements * x / HALF)) for x in h))
-    mesh.coords = {k: add(centre, mat_vec(R, p)) for k, p in mesh.coords.items()}
+    shape = cylinder_of_box if case.get("shape") == "cylinder" else (lambda p, h: p)
+    mesh.coords = {k: add(centre, mat_vec(R, shape(p, h))) for k, p in mesh.coords.items()}
     return mesh
+
+
+def cylinder_of_box(p, h):
+    """The box's x-y cross-section mapped onto the disk of radius h[0] (the elliptical grid
+    map u sqrt(1 - v^2 / 2), v sqrt(1 - u^2 / 2)): a cylinder along z."""
+    u, v = p[0] / h[0], p[1] / h[1]
+    return (h[0] * u * math.sqrt(1 - v * v / 2), h[0] * v * math.sqrt(1 - u * u / 2), p[2])
 
 
 def run_case(name, case, out, elements, contact, dt_max):
@@ -342,7 +367,8 @@ def scene_json(name, case, cell_size):
     return {
         "name": "calculix_%s" % name,
         "description": "CalculiX drop '%s': %s (tools/calculix/drops.py)" % (name, case["what"]),
-        "object": {"primitive": "box", "half_extents": list(half_extents(case)), "position": list(centre),
+        "object": {"mesh": "frames/frame_0000.ply"} if case.get("shape") == "cylinder" else
+                  {"primitive": "box", "half_extents": list(half_extents(case)), "position": list(centre),
                    "rotation_deg": [0, 0, -polar]},
         "grid": {"cell_size": cell_size},
         "material": material,

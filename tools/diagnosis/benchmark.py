@@ -139,7 +139,8 @@ def cases():
 # The independent set (tools/calculix/drops.sh): the case folder's effect, and how the fit's
 # scene is made from the truth's scene.json that drops.py writes (the effect taken out).
 CALCULIX_EFFECTS = {"clean": "none", "clean_slide": "none", "clean_brick": "none", "friction": "friction",
-                    "two_materials": "two_materials", "second_plane": "second_plane",
+                    "brick_friction": "friction", "two_materials": "two_materials", "second_plane": "second_plane",
+                    "floor_below": "second_plane", "cylinder_wall": "second_plane",
                     "neo_hookean": "nonlinear_material"}
 
 def without_effect(scene):
@@ -156,6 +157,8 @@ def calculix_cases(folder):
         scene = os.path.join(folder, name, "scene.json")
         if os.path.exists(scene):
             truth = json.load(open(scene))
+            if "mesh" in truth["object"]:  # relative to the case folder; the benchmark writes its scenes elsewhere
+                truth["object"]["mesh"] = os.path.abspath(os.path.join(folder, name, truth["object"]["mesh"]))
             out.append(dict(case("CalculiX " + name, effect, "-", truth, without_effect(truth), "CalculiX"),
                             frames=os.path.join(folder, name, "frames")))
             if name == "clean":  # the measurement on data no ssc simulation made (issue 25's amounts)
