@@ -139,7 +139,7 @@ def cases():
 # The independent set (tools/calculix/drops.sh): the case folder's effect, and how the fit's
 # scene is made from the truth's scene.json that drops.py writes (the effect taken out).
 CALCULIX_EFFECTS = {"clean": "none", "clean_slide": "none", "clean_brick": "none", "friction": "friction",
-                    "brick_friction": "friction", "two_materials": "two_materials", "second_plane": "second_plane",
+                    "friction_low": "friction", "two_materials": "two_materials", "second_plane": "second_plane",
                     "floor_below": "second_plane", "cylinder_wall": "second_plane",
                     "neo_hookean": "nonlinear_material"}
 
