@@ -473,6 +473,11 @@ constexpr double kSliceTolerance = 0.05;
 void slices_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const DiagnosisContext& c) {
   const Problem& problem = shared ? *shared : m.problem;
   PhysicalParameters at = PhysicalParameters::from_scene(problem.scene);
+  if (shared)  // the other candidates of the shared graph at off, as m was fitted
+    for (const ExtensionRow& row : extension_table())
+      if (row.fit == ExtensionRow::Fit::OffValue)
+        for (const std::string& n : expand_parameter_names(row.parameters(problem.scene), at))
+          set_parameter(at, n, row.off_value);
   const std::map<std::string, double> base = values_by_name(d.base);
   std::vector<std::string> names;
   std::vector<std::pair<double, double>> ranges;

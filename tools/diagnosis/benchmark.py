@@ -203,13 +203,14 @@ def run_case(c, a):
     if c.get("edit"):
         measurement_edit(obs, c["edit"])
     t0 = time.time()
-    r = run([a.ssc, "diagnose", fit, "--observations", obs, "--out", os.path.join(d, "diag"),
-             "--starts", str(a.starts), "--iterations", str(a.iterations), "--device", a.device] + a.diagnose_args.split())
+    log_path = os.path.join(d, "diagnose.log")  # written as it goes: its progress lines carry the elapsed time
+    with open(log_path, "w") as log:
+        r = subprocess.run([a.ssc, "diagnose", fit, "--observations", obs, "--out", os.path.join(d, "diag"),
+                            "--starts", str(a.starts), "--iterations", str(a.iterations), "--device", a.device] +
+                           a.diagnose_args.split(), stdout=log, stderr=subprocess.STDOUT, text=True)
     wall = time.time() - t0
-    with open(os.path.join(d, "diagnose.log"), "w") as log:  # its progress lines carry the elapsed time
-        log.write(r.stdout + r.stderr)
     if r.returncode:
-        print(f"{c['name']}: diagnose failed: {r.stderr.strip()[-300:]}", flush=True)
+        print(f"{c['name']}: diagnose failed: {open(log_path).read().strip()[-300:]}", flush=True)
         return {"name": c["name"], "effect": c["effect"], "strength": c["strength"], "cause": "failed", "seconds": wall}
     j = json.load(open(os.path.join(d, "diag", "diagnosis.json")))
     cand = {x["name"]: x for x in j["candidates"]}
