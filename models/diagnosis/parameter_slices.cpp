@@ -5,8 +5,7 @@
 #include <cmath>
 
 #include "models/cost/surface_constraint.h"
-#include "models/sim/compute_device.h"
-#include "models/sim/gradient.h"
+#include "models/optim/batch_evaluation.h"
 #include "models/sim/parameters.h"
 #include "runtime/errors.h"
 
@@ -29,14 +28,16 @@ std::vector<ParameterSlice> slice_parameters(const Problem& problem, const Physi
                                              const std::string& device) {
   if (ranges.size() != names.size() || log_scale.size() != names.size() || per_side < 1)
     throw InputError("slice_parameters: one range and one scale per parameter, at least one probe a side");
+  Eigen::VectorXd fitted(Eigen::Index(names.size()));
+  for (size_t j = 0; j < names.size(); ++j) fitted[Eigen::Index(j)] = get_parameter(at, names[j]);
   std::vector<ParameterSlice> slices(names.size());
-  std::vector<PhysicalParameters> items = {at};
-  std::vector<std::vector<int>> item_of(names.size());  // per slice, its values' batch items
+  std::vector<Eigen::VectorXd> points = {fitted};
+  std::vector<std::vector<int>> point_of(names.size());  // per slice, its values' points
   std::vector<size_t> fitted_index(names.size());
   for (size_t j = 0; j < names.size(); ++j) {
     ParameterSlice& s = slices[j];
     s.name = names[j];
-    s.fitted = get_parameter(at, names[j]);
+    s.fitted = fitted[Eigen::Index(j)];
     const auto [lo, hi] = ranges[j];
     auto toward = [&](double end, double fraction) {
       if (log_scale[j] && end > 0 && s.fitted > 0) return s.fitted * std::pow(end / s.fitted, fraction);
@@ -46,31 +47,36 @@ std::vector<ParameterSlice> slice_parameters(const Problem& problem, const Physi
     for (double end : {lo, hi}) {
       if (!std::isfinite(end) || end == s.fitted) continue;
       for (int k = per_side - 1; k >= 0; --k) {
-        const double v = k == 0 ? end : toward(end, std::ldexp(1.0, -k));
-        PhysicalParameters p = at;
-        set_parameter(p, names[j], v);
-        items.push_back(p);
-        probes.emplace_back(v, int(items.size()) - 1);
+        points.push_back(fitted);
+        points.back()[Eigen::Index(j)] = k == 0 ? end : toward(end, std::ldexp(1.0, -k));
+        probes.emplace_back(points.back()[Eigen::Index(j)], int(points.size()) - 1);
       }
     }
     std::sort(probes.begin(), probes.end());
     for (size_t k = 0; k < probes.size(); ++k) {
       s.values.push_back(probes[k].first);
-      item_of[j].push_back(probes[k].second);
+      point_of[j].push_back(probes[k].second);
       if (probes[k].second == 0) fitted_index[j] = k;
     }
   }
-  Simulation sim(problem.scene, problem.grid, int(items.size()), true);
-  place_on(sim, device);
-  for (size_t i = 0; i < items.size(); ++i) sim.set_parameters(int(i), items[i]);
+  // A probe whose simulation fails (the energy audit, say) is left out of its slice.
+  BatchSimulations sims(problem, device);
   const SurfaceConstraintCost cost(problem.grid, problem.phi_max);
-  GradientOptions o;
-  o.gradient = false;
-  const std::vector<CostGradient> r = evaluate_cost_gradient(sim, cost, problem.frames, o);
+  const std::vector<PointEvaluation> r = evaluate_batch(sims, cost, at, names, points, false);
+  if (!r[0].ok) throw SimulationError("the fit's own parameters failed to simulate: " + r[0].failure);
   for (size_t j = 0; j < names.size(); ++j) {
     ParameterSlice& s = slices[j];
-    for (int item : item_of[j]) s.costs.push_back(r[size_t(item)].cost);
-    supported_span(s, fitted_index[j], ranges[j].first, ranges[j].second, relative);
+    std::vector<double> values;
+    size_t fit = 0;
+    for (size_t k = 0; k < point_of[j].size(); ++k) {
+      const PointEvaluation& e = r[size_t(point_of[j][k])];
+      if (!e.ok) continue;
+      if (k == fitted_index[j]) fit = values.size();
+      values.push_back(s.values[k]);
+      s.costs.push_back(e.value.cost);
+    }
+    s.values = std::move(values);
+    supported_span(s, fit, ranges[j].first, ranges[j].second, relative);
   }
   return slices;
 }

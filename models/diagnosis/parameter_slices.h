@@ -24,7 +24,8 @@ struct ParameterSlice {
 
 // Probes per_side values on each side of every parameter's fitted value, at 1/2^(per_side-1),
 // ..., 1/2, 1 of the way to its range's end (in log space where log_scale), all as one batch of
-// forward simulations over problem's frames. A side whose end is not finite is not probed.
+// forward simulations over problem's frames. A side whose end is not finite is not probed; a
+// probe whose simulation fails is left out of its slice (so an end it failed at is not open).
 std::vector<ParameterSlice> slice_parameters(const Problem& problem, const PhysicalParameters& at,
                                              const std::vector<std::string>& names,
                                              const std::vector<std::pair<double, double>>& ranges,

@@ -142,10 +142,10 @@ CASES = {
         E=5e4, planes=[(TILT, 0.0, 0.0, None), (90.0, 180.0, -0.45, None)], gap=0.04,
         velocity=(1.5, -1.0, 0.0), duration=0.5),
     "neo_hookean": dict(
-        what="a soft Neo-Hookean cube (E = 10 kPa) thrown hard onto the incline: large strain (at 3 m/s ccx "
-             "stopped at t = 0.095 s, its increment below the minimum)",
+        what="a soft Neo-Hookean cube (E = 10 kPa) thrown hard onto the incline: large strain (at 3 m/s, and at "
+             "2 m/s with node-to-surface contact, ccx stopped at t = 0.095 and 0.147 s, its increment below the minimum)",
         E=1e4, neo_hookean=True, planes=[(TILT, 0.0, 0.0, None)], gap=0.04, velocity=(0.3, -2.0, 0.0),
-        duration=0.35, min_increment=1e-6),
+        duration=0.35, min_increment=1e-6, contact="SURFACE TO SURFACE"),
     "floor_below": dict(
         what="cube thrown down a frictionless 20 degree incline onto the flat floor it ends on, 0.15 m below "
              "(a second plane below the body)",
