@@ -468,8 +468,11 @@ void identifiability_at(Diagnosis& d, const FittedModel& m, const Problem* share
 // friction that lets it creep costs 150 times as much again: tests/test_parameter_slices.cpp.)
 constexpr double kSliceTolerance = 0.05;
 
-// Step 6b: the held-in cost along each of the cause's own simulation parameters (the others
-// at the fit) out to the ends of its plausible range, four probes a side, as one batch.
+// Probes a side of a slice: at 1/64, 1/32, ..., 1/2 and all of the way to the range's end.
+constexpr int kSliceProbes = 7;
+
+// Step 6b: the held-in cost along each of the cause's simulation parameters, the base's
+// included (the others at the fit), out to the ends of its plausible range, as one batch.
 void slices_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const DiagnosisContext& c) {
   const Problem& problem = shared ? *shared : m.problem;
   PhysicalParameters at = PhysicalParameters::from_scene(problem.scene);
@@ -478,7 +481,6 @@ void slices_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const 
       if (row.fit == ExtensionRow::Fit::OffValue)
         for (const std::string& n : expand_parameter_names(row.parameters(problem.scene), at))
           set_parameter(at, n, row.off_value);
-  const std::map<std::string, double> base = values_by_name(d.base);
   std::vector<std::string> names;
   std::vector<std::pair<double, double>> ranges;
   std::vector<bool> log_scale;
@@ -486,7 +488,6 @@ void slices_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const 
     const std::string& n = m.names[i];
     if (is_measurement_parameter(n)) continue;
     set_parameter(at, n, m.values[Eigen::Index(i)]);
-    if (base.count(n)) continue;
     const auto [lo, hi] = plausible_range(m.problem.scene, n, c.extent);
     if (!std::isfinite(lo) && !std::isfinite(hi)) continue;
     names.push_back(n);
@@ -494,8 +495,8 @@ void slices_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const 
     log_scale.push_back(lo > 0 && hi / lo > 100);
   }
   if (names.empty()) return;
-  d.slices = slice_parameters(held_in(problem, d.heldin_frames), at, names, ranges, log_scale, kSliceTolerance, 4,
-                              c.options.device);
+  d.slices = slice_parameters(held_in(problem, d.heldin_frames), at, names, ranges, log_scale, kSliceTolerance,
+                              kSliceProbes, c.options.device);
 }
 
 // Step 7: what to tell the user.
@@ -576,6 +577,12 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
       d.lines.push_back(fmt::format("{} and {}: correlation {:+.3f} at the fit (Gauss-Newton): the data fix a "
                                     "combination of them, not each",
                                     a, b, r));
+  std::string spans;
+  for (const ParameterSlice& s : d.slices)
+    spans += fmt::format("{}{} {} .. {} (fitted {})", spans.empty() ? "" : ", ", s.name, with_unit(s.name, s.low),
+                         with_unit(s.name, s.high), with_unit(s.name, s.fitted));
+  if (!spans.empty())
+    d.lines.push_back(fmt::format("the held-in cost stays within {} of the fit's over {}", percent(kSliceTolerance), spans));
   for (const ParameterSlice& s : d.slices) {
     if (!s.open_low && !s.open_high) continue;
     const std::string span = fmt::format("from {} to {}", with_unit(s.name, s.low), with_unit(s.name, s.high));

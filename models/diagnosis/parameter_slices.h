@@ -1,4 +1,4 @@
-// One-sided identification: the held-in cost along each of a fit's own parameters, the others
+// One-sided identification: the held-in cost along each of a fit's parameters, the others
 // held at the fit, out to the ends of the parameter's plausible range. Where the cost stays
 // within a tolerance of the fit's all the way to an end, the data fix the parameter on that
 // side only: a cube that comes to rest on a slope fixes a lower bound on its friction, not a
