@@ -470,6 +470,10 @@ constexpr double kSliceTolerance = 0.05;
 
 // Probes a side of a slice: at 1/64, 1/32, ..., 1/2 and all of the way to the range's end.
 constexpr int kSliceProbes = 7;
+// A parameter sliced in log space (the Young's modulus: 10 Pa to 1.2 TPa) is probed at most this
+// factor either way from its fit: a body a million times stiffer than fitted tells nothing more
+// and its solves take many times as long.
+constexpr double kSliceFactor = 1000;
 
 // Step 6b: the held-in cost along each of the cause's simulation parameters, the base's
 // included (the others at the fit), out to the ends of its plausible range, as one batch.
@@ -488,11 +492,14 @@ void slices_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const 
     const std::string& n = m.names[i];
     if (is_measurement_parameter(n)) continue;
     set_parameter(at, n, m.values[Eigen::Index(i)]);
-    const auto [lo, hi] = plausible_range(m.problem.scene, n, c.extent);
+    auto [lo, hi] = plausible_range(m.problem.scene, n, c.extent);
     if (!std::isfinite(lo) && !std::isfinite(hi)) continue;
+    const double v = m.values[Eigen::Index(i)];
+    const bool log = lo > 0 && hi / lo > 100;
+    if (log && v > 0) lo = std::max(lo, v / kSliceFactor), hi = std::min(hi, v * kSliceFactor);
     names.push_back(n);
     ranges.emplace_back(lo, hi);
-    log_scale.push_back(lo > 0 && hi / lo > 100);
+    log_scale.push_back(log);
   }
   if (names.empty()) return;
   d.slices = slice_parameters(held_in(problem, d.heldin_frames), at, names, ranges, log_scale, kSliceTolerance,
@@ -588,14 +595,15 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
     const std::string span = fmt::format("from {} to {}", with_unit(s.name, s.low), with_unit(s.name, s.high));
     const std::string within = fmt::format("the held-in cost stays within {} of the fit's", percent(kSliceTolerance));
     if (s.open_low && s.open_high)
-      d.lines.push_back(fmt::format("{}: not fixed by the data: {} (its whole plausible range) {}", s.name, span, within));
+      d.lines.push_back(fmt::format("{}: not fixed by the data: {} (the whole range probed) {}", s.name, span, within));
     else
-      d.lines.push_back(fmt::format("{}: the data fix only {} bound, {} {}: {} ({} the end of its plausible range) "
-                                    "{}; the fitted {} is one value of that plateau",
+      d.lines.push_back(fmt::format("{}: the data fix only {} bound, {} {}: {} ({} the end of the range probed: its "
+                                    "plausible range, at most a factor {:g} from the fit) {}; the fitted {} is one "
+                                    "value of that plateau",
                                     s.name, s.open_high ? "a lower" : "an upper", s.open_high ? ">=" : "<=",
                                     with_unit(s.name, s.open_high ? s.low : s.high), span,
-                                    s.open_high ? with_unit(s.name, s.high) : with_unit(s.name, s.low), within,
-                                    with_unit(s.name, s.fitted)));
+                                    s.open_high ? with_unit(s.name, s.high) : with_unit(s.name, s.low),
+                                    kSliceFactor, within, with_unit(s.name, s.fitted)));
   }
   if (!named.empty() && !d.identifiability.failure.empty())
     d.lines.push_back("identifiability not assessed: " + d.identifiability.failure);

@@ -16,7 +16,8 @@
 //   score_test.h       a ranking of the candidates with an "off" value from one backward pass
 //   held_out.h         the gain on the held-out frames with a bootstrap interval; the event
 //   identifiability.h  which parameters trade one for the other at the cause's fit
-//   parameter_slices.h which of the cause's parameters the data fix only from one side
+//   parameter_slices.h the span of each of the cause's parameters that fits as well, and
+//                      which of them the data fix only from one side
 // A candidate is named when its held-out gain is at least `min_gain`, its interval's lower end
 // beats by `margin` both its placebo's gain and the discretization controls' (the base model
 // on half the cell size and on half the time step: what the model's own discretization
@@ -76,8 +77,9 @@ struct Diagnosis {
   // between the two by more than 10 %: (candidate, "youngs_modulus 8.1 kPa with the base model,
   // 5.2 kPa with nonlinear_material").
   std::vector<std::pair<std::string, std::string>> undecided;
-  // The held-in cost along each of the cause's own parameters out to its plausible range's
-  // ends (parameter_slices.h): a span open at one end means the data fix only a bound.
+  // The held-in cost along each of the cause's parameters (the base's included) out to its
+  // plausible range's ends (parameter_slices.h): a span open at one end means the data fix
+  // only a bound.
   std::vector<ParameterSlice> slices;
   std::vector<std::string> lines;  // what to tell the user
   double seconds = 0;
