@@ -147,6 +147,15 @@ TEST_F(DiagnoseCli, NamesFrictionHiddenInDataFromASmallerTimeStep) {
       EXPECT_LT(c["event"]["aic_difference"].get<double>(), 0);
       EXPECT_GT(c["event"]["heldin_gain"].get<double>(), 0.2);
     }
+  // The slices through the friction fit: the base's modulus and friction, each span around its
+  // fitted value; the cube lands and slides, so friction is fixed on both sides.
+  ASSERT_EQ(d["slices"].size(), 2u);
+  for (const json& s : d["slices"]) {
+    EXPECT_LE(s["low"].get<double>(), s["fitted"].get<double>()) << s["parameter"];
+    EXPECT_GE(s["high"].get<double>(), s["fitted"].get<double>()) << s["parameter"];
+    EXPECT_EQ(s["values"].size(), s["costs"].size());
+    if (s["parameter"] == "ground.friction") EXPECT_FALSE(s["open_low"] || s["open_high"]);
+  }
   const std::string html = [&] {
     std::ifstream in(dir_ / "diag" / "report.html");
     std::stringstream s;
