@@ -240,10 +240,40 @@ def run_case(c, a):
     json.dump(x, open(os.path.join(d, "result.json"), "w"), indent=1)  # kept if the run is stopped later
     return x
 
+def confusion(results):
+    """The confusion matrix: one row per hidden effect, one column per cause named, the count of
+    cases in each cell; the diagonal is named right."""
+    if not results:
+        return "no cases\n"
+    effects = sorted({r["effect"] for r in results}, key=lambda e: (e != "none", e))
+    named = sorted({r["cause"] for r in results} | set(effects), key=lambda e: (e != "none", e not in effects, e))
+    count = {(r["effect"], r["cause"]): 0 for r in results}
+    for r in results:
+        count[(r["effect"], r["cause"])] += 1
+    rows = ["| hidden effect \\ named | " + " | ".join(named) + " | right |", "|---" * (len(named) + 2) + "|"]
+    for e in effects:
+        cells = [str(count.get((e, n), 0) or ".") for n in named]
+        cells = [f"**{c}**" if n == e and c != "." else c for c, n in zip(cells, named)]
+        total = sum(1 for r in results if r["effect"] == e)
+        rows.append(f"| {e} | " + " | ".join(cells) + f" | {count.get((e, e), 0)} of {total} |")
+    right = sum(1 for r in results if r["cause"] == r["effect"])
+    return "\n".join(rows) + f"\n\n{right} of {len(results)} cases named right.\n"
+
+def read_results(paths):
+    """Results from benchmark runs: --json lists or single result.json files, the last of each case name."""
+    by_name = {}
+    for path in paths:
+        doc = json.load(open(path))
+        for r in doc if isinstance(doc, list) else [doc]:
+            by_name[r["name"]] = r
+    return list(by_name.values())
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--ssc", required=True)
-    ap.add_argument("--work", required=True)
+    ap.add_argument("--confusion", nargs="+", metavar="RESULTS",
+                    help="print the confusion matrix of earlier runs' results (--json files or result.json) and stop")
+    ap.add_argument("--ssc")
+    ap.add_argument("--work")
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--starts", type=int, default=8)        # ssc diagnose's defaults
     ap.add_argument("--iterations", type=int, default=30)
@@ -255,6 +285,11 @@ def main():
     ap.add_argument("--jobs", type=int, default=1, help="diagnoses run at once (one GPU shares them)")
     ap.add_argument("--diagnose-args", default="", help="more arguments for ssc diagnose (e.g. '--gpus 1')")
     a = ap.parse_args()
+    if a.confusion:
+        print(confusion(read_results(a.confusion)), end="")
+        return
+    if not a.ssc or not a.work:
+        ap.error("--ssc and --work are required (unless --confusion)")
     os.makedirs(a.work, exist_ok=True)
     results = []
     todo = timing_cases() if a.timing else calculix_cases(a.calculix) if a.calculix else cases()
@@ -266,7 +301,7 @@ def main():
             results.append(x)
     if a.json:
         json.dump(results, open(a.json, "w"), indent=1)
-        open(a.json + ".md", "w").write(markdown(results))
+        open(a.json + ".md", "w").write(markdown(results) + "\n" + confusion(results))
 
 def markdown(results):
     """The table of docs/diagnosis.md."""
