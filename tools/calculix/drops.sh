@@ -28,8 +28,15 @@ if [ "${1:-}" = "--test-data" ]; then
     mkdir -p "$out/clean"
     cp -r "$tmp/clean/obs" "$tmp/clean/frames" "$tmp/clean/scene.json" "$tmp/clean/ccx_run.json" "$tmp/clean/drop_clean.inp" \
           "$tmp/clean/mesh_clean.inp" "$out/clean/"
+    # the friction slides, whole (0.2 s): their scene and surface frames (tests/test_calculix_friction.cpp)
+    python3 "$here/drops.py" "$tmp" --cases friction,friction_low --elements 3 --jobs 2
+    for c in friction friction_low; do
+        rm -rf "$out/$c"
+        mkdir -p "$out/$c"
+        cp -r "$tmp/$c/frames" "$tmp/$c/scene.json" "$out/$c/"
+    done
     rm -rf "$tmp"
-    echo "drops.sh: wrote $out/clean"
+    echo "drops.sh: wrote $out/clean, $out/friction, $out/friction_low"
     exit 0
 fi
 
