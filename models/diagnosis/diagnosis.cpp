@@ -418,24 +418,34 @@ void find_undecided(Diagnosis& d, const DiagnosisContext& c) {
 // (shared: the graph m was fitted in, with every extension that has an off value) the other
 // candidates' parameters at off. Steps: 1e-3 of a value, 1e-2 of a typical amount at 0
 // (forward, so that friction and drag stay valid).
-void identifiability_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const DiagnosisContext& c) {
-  const Problem& problem = shared ? *shared : m.problem;
+// The cause's fit m as a point of the problem it is simulated in: the shared batch's (every
+// extension with an off value present, the others' at off, as m was fitted) or its own; m's
+// simulation parameters at their fitted values (a measurement's correction is in the problem's
+// frames, not the simulation's). `off` receives the parameters set to off.
+PhysicalParameters fit_point(const FittedModel& m, const Problem& problem, bool shared, std::vector<std::string>* off) {
   PhysicalParameters at = PhysicalParameters::from_scene(problem.scene);
-  // A measurement's correction is in the problem's frames; its parameter is not the simulation's.
-  std::vector<std::string> names;
-  for (const std::string& n : m.names)
-    if (!is_measurement_parameter(n)) names.push_back(n);
   if (shared)
     for (const ExtensionRow& row : extension_table()) {
       if (row.fit != ExtensionRow::Fit::OffValue) continue;
-      for (const std::string& n : expand_parameter_names(row.parameters(problem.scene), at))
-        if (std::find(names.begin(), names.end(), n) == names.end()) {
-          names.push_back(n);
-          set_parameter(at, n, row.off_value);
-        }
+      for (const std::string& n : expand_parameter_names(row.parameters(problem.scene), at)) {
+        set_parameter(at, n, row.off_value);
+        if (off) off->push_back(n);
+      }
     }
   for (size_t i = 0; i < m.names.size(); ++i)
     if (!is_measurement_parameter(m.names[i])) set_parameter(at, m.names[i], m.values[Eigen::Index(i)]);
+  return at;
+}
+
+void identifiability_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const DiagnosisContext& c) {
+  const Problem& problem = shared ? *shared : m.problem;
+  std::vector<std::string> off;
+  const PhysicalParameters at = fit_point(m, problem, shared != nullptr, &off);
+  std::vector<std::string> names;
+  for (const std::string& n : m.names)
+    if (!is_measurement_parameter(n)) names.push_back(n);
+  for (const std::string& n : off)
+    if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
   if (std::find(names.begin(), names.end(), "mass_damping") == names.end()) names.push_back("mass_damping");
   std::vector<double> steps;
   for (const std::string& n : names) {
@@ -479,19 +489,13 @@ constexpr double kSliceFactor = 1000;
 // included (the others at the fit), out to the ends of its plausible range, as one batch.
 void slices_at(Diagnosis& d, const FittedModel& m, const Problem* shared, const DiagnosisContext& c) {
   const Problem& problem = shared ? *shared : m.problem;
-  PhysicalParameters at = PhysicalParameters::from_scene(problem.scene);
-  if (shared)  // the other candidates of the shared graph at off, as m was fitted
-    for (const ExtensionRow& row : extension_table())
-      if (row.fit == ExtensionRow::Fit::OffValue)
-        for (const std::string& n : expand_parameter_names(row.parameters(problem.scene), at))
-          set_parameter(at, n, row.off_value);
+  const PhysicalParameters at = fit_point(m, problem, shared != nullptr, nullptr);
   std::vector<std::string> names;
   std::vector<std::pair<double, double>> ranges;
   std::vector<bool> log_scale;
   for (size_t i = 0; i < m.names.size(); ++i) {
     const std::string& n = m.names[i];
     if (is_measurement_parameter(n)) continue;
-    set_parameter(at, n, m.values[Eigen::Index(i)]);
     auto [lo, hi] = plausible_range(m.problem.scene, n, c.extent);
     if (!std::isfinite(lo) && !std::isfinite(hi)) continue;
     const double v = m.values[Eigen::Index(i)];
