@@ -84,9 +84,11 @@ __device__ inline unsigned long long add_release(unsigned long long* p, unsigned
 // the count reaches the next multiple of gridDim.x (the same for every launch of one
 // kernel over one problem, so the counter stays valid from launch to launch). Writes
 // before the barrier (any block) are visible after it: release on arrival, acquire on
-// leaving. One atomic and the polls per block.
+// leaving. One atomic and the polls per block; an item of one block only meets at
+// __syncthreads (the counter stays untouched).
 __device__ inline void grid_sync(unsigned long long* bar) {
   __syncthreads();
+  if (gridDim.x == 1) return;
   if (threadIdx.x == 0) {
     const unsigned long long blocks = gridDim.x;
     const unsigned long long target = (add_release(bar, 1ull) / blocks + 1) * blocks;
@@ -100,9 +102,12 @@ __device__ inline void grid_sync(unsigned long long* bar) {
 // the block totals in block order by warp 0 of every block): every thread of every block
 // returns with the same bits. partial holds N * gridDim.x doubles; consecutive calls must
 // use different partial buffers unless a grid_sync separates them. Includes a grid_sync.
+// An item of one block returns with its block tree's totals: the same bits (the block
+// total plus zeros).
 template <int N>
 __device__ inline void grid_sum(double (&v)[N], double* partial, unsigned long long* bar) {
   block_sum<N, SSC_GRID>(v);
+  if (gridDim.x == 1) return;
   if (threadIdx.x == 0)
     for (int k = 0; k < N; ++k) partial[N * blockIdx.x + k] = v[k];
   grid_sync(bar);

@@ -160,6 +160,47 @@ __device__ __forceinline__ void extension_solve_node(int i, const int* node_band
   for (int k = node_band_offset[i]; k < node_band_offset[i + 1]; ++k) add3(u_bar, i, load3(y, node_band_entry[k]));
 }
 
+// ---- The extension as one product (runtime/band_operator.h) ----
+
+// band_u = G u with a block of SSC_BLOCK threads per 32 band nodes: lane l of warp w sums
+// band node 32 * blockIdx.x + l over the w-th of the block's warp count of slices of the
+// sources (j ascending; G's column j holds band_count values, so a warp's loads are
+// contiguous), and warp 0 adds the slices in order. Launched over len = SSC_BLOCK *
+// ceil(n_band / 32) threads, so every block is whole.
+template <class R>
+__device__ __forceinline__ void extension_dense(int n_band, int n_source, const R* columns, const int* sources,
+                                                const R* u, R* band_u) {
+  constexpr int kWarps = SSC_BLOCK / 32;
+  __shared__ R slice_sum[kWarps][32][3];
+  const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5, i = 32 * blockIdx.x + lane;
+  const int first = int((long(n_source) * warp) / kWarps), last = int((long(n_source) * (warp + 1)) / kWarps);
+  Vec3<R> s = zero3<R>();
+  if (i < n_band) {
+#pragma unroll 4
+    for (int j = first; j < last; ++j) s += columns[size_t(j) * size_t(n_band) + size_t(i)] * load3(u, sources[j]);
+  }
+  for (int k = 0; k < 3; ++k) slice_sum[warp][lane][k] = s[k];
+  __syncthreads();
+  if (warp == 0 && i < n_band) {
+    Vec3<R> total = zero3<R>();
+    for (int w = 0; w < kWarps; ++w) total += make_vec3(slice_sum[w][lane][0], slice_sum[w][lane][1], slice_sum[w][lane][2]);
+    store3(band_u, i, total);
+  }
+}
+
+// Thread t: lane t & 31 of the warp of source j = t >> 5 adds its strided share of
+// (G^T band_u_bar)(j), a fixed shuffle tree totals the warp, lane 0 adds it to u_bar.
+template <class R>
+__device__ __forceinline__ void extension_dense_adjoint(int t, int n_band, const R* columns, const int* sources,
+                                                        const R* band_u_bar, R* u_bar) {
+  const int j = t >> 5, lane = t & 31;
+  const R* column = columns + size_t(j) * size_t(n_band);
+  Vec3<R> s = zero3<R>();
+  for (int i = lane; i < n_band; i += 32) s += column[i] * load3(band_u_bar, i);
+  for (int mask = 16; mask > 0; mask >>= 1) s += shfl_xor3(s, mask);
+  if (lane == 0) add3(u_bar, sources[j], s);
+}
+
 // ---- Block-per-item Jacobi-PCG (Extent::Item) ----
 //
 // One block of SSC_ITEM threads per batch item: thread i walks k = i, i + SSC_ITEM, ...

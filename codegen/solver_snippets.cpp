@@ -201,6 +201,19 @@ std::vector<Snippet> extension_solver(const Graph& g, int op, bool adjoint) {
     b.value("zero_x", "int").stage("rhs = band_u cotangent, x = 0 or the later step's solution, Jacobi diagonal");
     s.push_back(b.code("gen::extension_adj_setup<Real>(i, $d_band_u, g_band_degree, zero_x, v_x, v_b, v_inv_diag);\n"));
   }
+  if (!adjoint) {
+    Builder b(g, op, "extension_dense", Extent::Len);
+    b.t("u", false, true).t("band_u", true).grid("band_operator", "Real").grid("band_sources", "int");
+    b.value("n_source", "int").value("len", "int");
+    b.stage("band_u = G u, the extension as one product, slices of the sources per warp (runtime/band_operator.h)");
+    s.push_back(b.code("gen::extension_dense<Real>(n_band, n_source, g_band_operator, g_band_sources, $u, $band_u);\n"));
+  } else {
+    Builder b(g, op, "extension_dense_adjoint", Extent::Len);
+    b.a("u").a("band_u", false).grid("band_operator", "Real").grid("band_sources", "int").value("len", "int");
+    b.stage("u_bar += G^T band_u_bar, a warp per source (runtime/band_operator.h)");
+    s.push_back(b.code(
+        "gen::extension_dense_adjoint<Real>(i, n_band, g_band_operator, g_band_sources, $d_band_u, $d_u);\n"));
+  }
   {
     Builder b(g, op, "extension_apply", Extent::Band);
     b.grid("band_neighbors", "int").grid("band_degree", "int").vec("p", false, x3, true).vec("q", true, x3);

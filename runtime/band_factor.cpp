@@ -50,6 +50,12 @@ void BandLaplacianFactor::solve(const float* rhs, float* x) const {
   for (size_t i = 0; i < r.size(); ++i) x[i] = float(y[i]);
 }
 
+void BandLaplacianFactor::solve_columns(int count, const double* rhs, double* x) const {
+  const int n = impl_->n;
+  const Eigen::Map<const Eigen::MatrixXd> b(rhs, n, count);
+  Eigen::Map<Eigen::MatrixXd>(x, n, count) = impl_->ldlt.solve(b);
+}
+
 const BandLaplacianFactor* BandFactorCache::get(const StaticArrays& g) {
   std::call_once(once_, [&] {
     if (g.band_count <= 0 || g.band_count > kDirectBandNodes) return;

@@ -2,9 +2,10 @@
 // runtime/solvers.cpp) factored once per grid for the CPU interpreter: the matrix depends on the
 // grid alone, the same for every step, batch item, parameter value and component, so a sparse
 // Cholesky factorisation (LDL^T, fill-reducing ordering) replaces a Jacobi-PCG solve per step
-// by two triangular solves. The GPU keeps its PCG (the same "what", another "how"); the two agree
-// within the extension's tolerance. Grids with more band nodes than kDirectBandNodes keep the
-// PCG on the CPU too (the factor's fill grows faster than the band).
+// by two triangular solves. The GPU multiplies by the dense block of the inverse that the
+// extension needs, formed from this factor (runtime/band_operator.h), or runs its PCG. Grids
+// with more band nodes than kDirectBandNodes keep the PCG on the CPU too (the factor's fill
+// grows faster than the band).
 #pragma once
 #include <memory>
 #include <mutex>
@@ -23,6 +24,8 @@ class BandLaplacianFactor {
   // x = L^-1 rhs for the three interleaved components (3 * band_count values each).
   void solve(const double* rhs, double* x) const;
   void solve(const float* rhs, float* x) const;
+  // x = L^-1 rhs for `count` scalar right-hand sides (band_count values each, one after another).
+  void solve_columns(int count, const double* rhs, double* x) const;
 
  private:
   struct Impl;

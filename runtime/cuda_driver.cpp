@@ -63,6 +63,8 @@ Loaded load() {
   opt(d.GraphDestroy, "cuGraphDestroy");
   opt(d.LaunchCooperativeKernel, "cuLaunchCooperativeKernel");
   opt(d.OccupancyMaxActiveBlocksPerMultiprocessor, "cuOccupancyMaxActiveBlocksPerMultiprocessor");
+  opt(d.LaunchKernelEx, "cuLaunchKernelEx");
+  opt(d.FuncSetAttribute, "cuFuncSetAttribute");
   if (const Result r = d.Init(0); r != 0) {
     const char* s = nullptr;
     d.GetErrorString(r, &s);

@@ -58,12 +58,36 @@ struct Driver {
   Result (*LaunchCooperativeKernel)(Function, unsigned, unsigned, unsigned, unsigned, unsigned, unsigned, unsigned,
                                     Stream, void**);
   Result (*OccupancyMaxActiveBlocksPerMultiprocessor)(int*, Function, int, size_t);
+  // Launches with attributes (thread-block clusters) and function attributes: optional.
+  Result (*LaunchKernelEx)(const struct LaunchConfig*, Function, void**, void**);
+  Result (*FuncSetAttribute)(Function, int, int);
   bool has_cooperative() const { return LaunchCooperativeKernel && OccupancyMaxActiveBlocksPerMultiprocessor; }
+  bool has_clusters() const { return LaunchKernelEx && FuncSetAttribute; }
   bool has_graphs() const {
     return StreamCreate && StreamDestroy && StreamBeginCapture && StreamEndCapture && GraphInstantiate && GraphLaunch &&
            GraphExecDestroy && GraphDestroy;
   }
 };
+
+// CUlaunchAttribute and CUlaunchConfig with the fields ssc sets (the driver's layout).
+struct LaunchAttribute {
+  int id;
+  char pad[4];
+  union {
+    char bytes[64];
+    struct {
+      unsigned x, y, z;
+    } cluster;
+  } value;
+};
+struct LaunchConfig {
+  unsigned grid_x, grid_y, grid_z, block_x, block_y, block_z, shared_bytes;
+  Stream stream;
+  LaunchAttribute* attrs;
+  unsigned attr_count;
+};
+static_assert(sizeof(LaunchAttribute) == 72, "CUlaunchAttribute is 72 bytes");
+constexpr int kLaunchAttrClusterDimension = 4;  // CU_LAUNCH_ATTRIBUTE_CLUSTER_DIMENSION
 
 constexpr unsigned kStreamNonBlocking = 1;   // CU_STREAM_NON_BLOCKING
 constexpr int kCaptureModeThreadLocal = 1;   // CU_STREAM_CAPTURE_MODE_THREAD_LOCAL
@@ -72,6 +96,8 @@ constexpr int kCaptureModeThreadLocal = 1;   // CU_STREAM_CAPTURE_MODE_THREAD_LO
 constexpr int kAttrComputeCapabilityMajor = 75, kAttrComputeCapabilityMinor = 76;
 constexpr int kAttrMultiprocessorCount = 16, kAttrCooperativeLaunch = 95;
 constexpr int kFuncAttrNumRegs = 4, kFuncAttrSharedSizeBytes = 1, kFuncAttrLocalSizeBytes = 3;
+constexpr int kFuncAttrMaxDynamicSharedBytes = 8, kFuncAttrNonPortableClusterSize = 14;
+constexpr int kAttrMaxSharedPerBlockOptin = 97;
 
 // The loaded driver with cuInit done and at least one device, or nullptr; `why` then
 // says what is missing (no libcuda, cuInit error, no device).

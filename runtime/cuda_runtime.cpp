@@ -268,6 +268,12 @@ void GpuTimestep::Impl::setup() {
   tensor_arena = alloc(end);
   for (size_t t = 0; t < graph.tensors().size(); ++t) tensors.push_back({tensor_arena.ptr + offset[t], bytes[t]});
   upload_grid();
+  if (options.dense_extension && !disabled_by_env("SSC_GPU_DENSE_EXTENSION") && plan.find(false, "extension_dense"))
+    dense_extension = band_extension_operator(grid);
+  if (dense_extension) {
+    upload_real("band_operator", dense_extension->columns);
+    upload_int("band_sources", dense_extension->sources);
+  }
   allocate_scratch(plan.forward);
   cg_iterations.assign(batch, 0);
   use_graphs = options.graphs && !options.profile && !disabled_by_env("SSC_GPU_GRAPHS") && d->has_graphs() &&

@@ -67,6 +67,10 @@ struct GpuOptions {
   // traffic, for throughput), or 0: 2 where a thread owns two or more band nodes, i.e. for
   // large batches (SSC_GPU_EXTENSION_PHASES=1 or 2 overrides).
   int extension_phases = 0;
+  // The extension as one dense product G u and its adjoint as G^T band_u_bar where G
+  // (runtime/band_operator.h) fits kDenseExtensionBytes; else, or off, or with
+  // SSC_GPU_DENSE_EXTENSION=0, the extension's PCG.
+  bool dense_extension = true;
 };
 
 struct GpuKernelTiming {

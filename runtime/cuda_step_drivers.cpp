@@ -7,6 +7,8 @@
 // (newmark_pcg_grid; extension_pcg_grid, or its two-phase form for large batches) when
 // grid solves are on, whose outcomes the host reads after the step; else the host-driven
 // iteration kernels.
+// Where the extension is one dense product (runtime/band_operator.h), it is a single
+// kernel each way instead.
 // Adjoint (implicit-function adjoints, as runtime/interpreter_adjoint.cpp): the
 // extension's cotangent solve L y = band_u_bar into scratch y (warm-started from the
 // previous, later step's y within one backward pass), the time-step system's
@@ -80,6 +82,13 @@ void GpuTimestep::Impl::newmark(int o) {
 
 void GpuTimestep::Impl::extension(int o) {
   const OpNode& op = graph.ops()[o];
+  if (dense_extension) {
+    Call product;
+    product.values = {{"n_source", double(dense_extension->sources.size())}};
+    product.len = long(gpu_detail::kBlock) * ((sizes.band + 31) / 32);  // whole blocks (gen::extension_dense)
+    launch(kernel("extension_dense", false, o), product);
+    return;
+  }
   const cu::DevicePtr x = tensors.at(op.output("band_u")).ptr;
   Call setup;
   setup.vectors = {{"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
@@ -159,6 +168,12 @@ void GpuTimestep::Impl::clear_warm_starts() {
 }
 
 void GpuTimestep::Impl::adjoint_extension(int o) {
+  if (dense_extension) {  // y stays zero: extension_solve_nodes adds nothing
+    Call product;
+    product.len = 32L * long(dense_extension->sources.size());
+    launch(kernel("extension_dense_adjoint", true, o), product);
+    return;
+  }
   const cu::DevicePtr y = scratch.at(scratch_of("y", o)).ptr;
   Call setup;
   setup.vectors = {{"v_x", y}, {"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};

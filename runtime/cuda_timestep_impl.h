@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "codegen/kernel_plan.h"
+#include "runtime/band_operator.h"
 #include "runtime/cuda_driver.h"
 #include "runtime/cuda_runtime.h"
 
@@ -113,6 +114,9 @@ struct GpuTimestep::Impl {
   int multiprocessors = 0;
   std::map<std::string, int> grid_capacity;  // per grid kernel: resident blocks on the device
   std::string extension_grid;                 // the extension's grid kernel (GpuOptions::extension_phases)
+  // The extension as one product (GpuOptions::dense_extension), uploaded as g_band_operator
+  // and g_band_sources; nullptr: the PCG.
+  std::shared_ptr<const BandExtensionOperator> dense_extension;
   std::vector<SolveCheck> solve_checks;       // this step's grid solves, read after it
 
   Impl(const Graph& g, const StaticArrays& gr, int b, const SolverOptions& s, const GpuOptions& o)
