@@ -54,12 +54,14 @@ __device__ __forceinline__ Vec3<R> newmark_node_apply(const ops::NewmarkCoeffici
 // ---- Newmark stages (one thread per node, cell or cell corner i) ----
 
 // The solve's initial guess: the guess given (a nonlinear iteration's iterate), else
-// u- + dt v-; 0 on fixed nodes.
+// ops::newmark_start; 0 on fixed nodes.
 template <class R>
-__device__ __forceinline__ void newmark_init(int i, const R* dt, const R* u_prev, const R* v_prev, const R* fixed,
-                                             const R* guess, R* u) {
+__device__ __forceinline__ void newmark_init(int i, const R* dt, const R* theta, const R* u_prev, const R* v_prev,
+                                             const R* v_before, const R* fixed, const R* guess, R* u) {
   for (int k = 0; k < 3; ++k)
-    u[3 * i + k] = fixed[i] != R(0) ? R(0) : guess ? guess[3 * i + k] : u_prev[3 * i + k] + dt[0] * v_prev[3 * i + k];
+    u[3 * i + k] = fixed[i] != R(0) ? R(0)
+                   : guess          ? guess[3 * i + k]
+                                    : ops::newmark_start(dt[0], theta[0], u_prev, v_prev, v_before, 3 * i + k);
 }
 
 // Corner i & 7 of cell i >> 3 of the stiffness diagonal.

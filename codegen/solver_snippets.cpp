@@ -137,11 +137,14 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   std::vector<Snippet> s;
   if (!adjoint) {
     Builder b(g, op, "newmark_init", Extent::Node);
-    b.t("u", true).t("u_prev").t("v_prev").t("fixed").t("dt").stage("u = the guess or u- + dt v- (initial guess)");
-    const bool guess = g.ops().at(op).bound("guess");
+    b.t("u", true).t("u_prev").t("v_prev").t("fixed").t("dt").t("theta");
+    b.stage("u = the guess or the prediction from u-, v- and v_before (initial guess)");
+    const bool guess = g.ops().at(op).bound("guess"), before = g.ops().at(op).bound("v_before");
     if (guess) b.t("guess");
-    s.push_back(b.code(std::string("gen::newmark_init<Real>(i, $dt, $u_prev, $v_prev, $fixed, ") +
-                       (guess ? "$guess" : "nullptr") + ", $u);\n"));
+    if (before) b.t("v_before");
+    s.push_back(b.code(std::string("gen::newmark_init<Real>(i, $dt, $theta, $u_prev, $v_prev, ") +
+                       (before ? "$v_before" : "nullptr") + ", $fixed, " + (guess ? "$guess" : "nullptr") +
+                       ", $u);\n"));
   }
   {
     Builder b(g, op, "newmark_diag", Extent::Len);

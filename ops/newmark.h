@@ -197,6 +197,17 @@ SSC_HD inline void adj_newmark_rhs_node(int i, const PartContext<Real>&, const R
   coefficient_bar_share[2 * i + 1] = double(cb.b_k);
 }
 
+// The time-step solve's start without a guess, component k of node i: u- + dt v-, plus
+// theta dt (v- - v_before) where the velocity a step earlier is known (v_before != nullptr):
+// the last step's acceleration carried on, as the scheme's u = u- + dt v- + theta dt (v - v-)
+// would have it (89 -> 74 CG iterations a step on the paper's dragon, docs/benchmarks.md).
+template <class Real>
+SSC_HD inline Real newmark_start(Real dt, Real theta, const Real* u_prev, const Real* v_prev, const Real* v_before,
+                                 int k) {
+  const Real u = u_prev[k] + dt * v_prev[k];
+  return v_before ? u + theta * dt * (v_prev[k] - v_before[k]) : u;
+}
+
 // ---- the velocity_update op ----
 
 template <class Real>
@@ -299,7 +310,8 @@ inline OpSpec newmark_rhs_spec() {
 // "newmark_pcg" (runtime/solvers.cpp, codegen/solver_snippets.cpp); its adjoint solves the
 // same system for the cotangent, w = A^-1 u_bar into the scratch buffer w, and the adjoint
 // parts hand the parameters -w^T dA/dp u. An optional guess (not differentiated: the solution
-// does not depend on it) starts the CG iterations instead of u- + dt v-.
+// does not depend on it) starts the CG iterations instead of newmark_start's prediction, which
+// the optional v_before (the velocity a step earlier) improves.
 inline OpSpec newmark_solve_spec() {
   OpSpec s;
   s.name = "newmark_solve";
@@ -309,7 +321,8 @@ inline OpSpec newmark_solve_spec() {
              in("mass", Access::Opaque), in("rhs", Access::Opaque),
              constant_in("u_prev", Access::Opaque), constant_in("v_prev", Access::Opaque),
              constant_in("fixed", Access::Opaque), optional_in("damping", Access::Opaque),
-             SlotSpec{"guess", false, Access::Opaque, true, false}, constant_in("dt"),
+             SlotSpec{"guess", false, Access::Opaque, true, false},
+             SlotSpec{"v_before", false, Access::Opaque, true, false}, constant_in("dt"),
              constant_in("theta"), in("mass_damping"), in("stiffness_damping"), out("u"), out("cg_iterations")};
   s.slots.back().differentiable = false;
   s.scratch = {{"w", Domain::Node, 3, ""}, {"ku", Domain::Cell, 24, ""}, {"red", Domain::Node, 2, ""}};

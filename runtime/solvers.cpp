@@ -116,8 +116,11 @@ void newmark_forward(Interpreter<Real>& in, const OpNode& op, int b) {
   const Real *u_prev = a.value("u_prev"), *v_prev = a.value("v_prev"), *fixed = a.value("fixed");
   Real* u = a.out("u");
   const Real* guess = a.optional("guess");  // a nonlinear iteration's iterate
+  const Real* v_before = a.optional("v_before");
   for (int i = 0; i < 3 * g.node_count; ++i)
-    u[i] = fixed[i / 3] != Real(0) ? Real(0) : guess ? guess[i] : u_prev[i] + system.c.dt * v_prev[i];
+    u[i] = fixed[i / 3] != Real(0) ? Real(0)
+           : guess                 ? guess[i]
+                                   : ops::newmark_start(system.c.dt, system.c.theta, u_prev, v_prev, v_before, i);
   const SolverOptions& o = in.options();
   if (b == 0)
     dump_system_if_asked(g, a.value("rhs"), u, [&](int node) { return system.is_fixed(node); },

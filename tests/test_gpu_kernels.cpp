@@ -116,6 +116,8 @@ struct RandomStep {
           v[3 * i + k] = dv[k] + 0.05 * normal(rng);
         }
       }
+      // A state without history: no acceleration carried into the solve's start.
+      if (tg.v_before >= 0) std::copy_n(v, 3 * n, st.data(tg.v_before, b));
     }
     sim.interpreter().run();
   }

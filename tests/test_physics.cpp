@@ -113,7 +113,11 @@ TEST(PhysicsFreeFall, CentreOfMassFollowsTheThetaSchemeRecursion) {
       sim.step();
       const Vec3 d = sim.center_of_mass(0) - c0;
       worst = std::max(worst, std::abs(d.y() - ref[n]) / std::abs(ref[n]));
-      ASSERT_LT(std::abs(d.x()) + std::abs(d.z()), 1e-12) << "step " << n + 1;
+      // Sideways: zero but for the CG's truncation. Its tolerance (1e-6 of the right-hand
+      // side) allows about 4e-8 m a step here; since the solve starts from the carried-on
+      // acceleration (ops/newmark.h, newmark_start) it stops sooner and the sideways error
+      // grows to 2e-11 m by step 40 (1e-13 m before).
+      ASSERT_LT(std::abs(d.x()) + std::abs(d.z()), 1e-9) << "step " << n + 1;
     }
     std::printf("free fall, alpha %.1f: worst relative deviation from the scalar recursion %.2e (u(0.4 s) = %.6f m)\n",
                 alpha, worst, ref.back());

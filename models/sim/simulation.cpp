@@ -166,6 +166,7 @@ void Simulation::reset() {
     }
     if (graph_.band_guess >= 0) std::fill_n(st.data(graph_.band_guess, b), 3 * grid_.band_count, 0.0);
     if (graph_.band_u >= 0) std::fill_n(st.data(graph_.band_u, b), 3 * grid_.band_count, 0.0);
+    if (graph_.v_before >= 0) std::copy_n(v, 3 * grid_.node_count, st.data(graph_.v_before, b));  // no acceleration yet
   }
   steps_ = 0;
   band_current_ = true;
@@ -231,9 +232,12 @@ void Simulation::advance(bool to_host, int keep_key, bool extend) {
     if (to_host)
       for (int t : {graph_.u, graph_.v, band ? graph_.band_u : -1, graph_.cg_iterations})
         if (t >= 0) backend_->download(st, t);
-    std::vector<std::pair<int, int>> next = {{graph_.u, graph_.u_prev}, {graph_.v, graph_.v_prev}};
+    std::vector<std::pair<int, int>> next;  // in order: v_prev becomes v_before before v becomes v_prev
+    if (graph_.v_before >= 0) next.push_back({graph_.v_prev, graph_.v_before});
+    next.insert(next.end(), {{graph_.u, graph_.u_prev}, {graph_.v, graph_.v_prev}});
     if (band) next.push_back({graph_.band_u, graph_.band_guess});
     backend_->copy_tensors(next);
+    if (to_host && graph_.v_before >= 0) backend_->download(st, graph_.v_before);  // not derived on the host below
     device_current_ = true;
   } catch (const SimulationError& e) {
     throw SimulationError(fmt::format("step {}: {}", steps_ + 1, e.what()), e.items);
@@ -263,6 +267,7 @@ void Simulation::sync_host() {
 std::vector<int> Simulation::state_tensors() const {
   std::vector<int> t = {graph_.u_prev, graph_.v_prev};
   if (graph_.band_guess >= 0) t.push_back(graph_.band_guess);
+  if (graph_.v_before >= 0) t.push_back(graph_.v_before);
   return t;
 }
 
@@ -336,6 +341,10 @@ Simulation::State Simulation::state(int b) const {
   s.u.assign(u, u + 3 * grid_.node_count);
   s.v.assign(v, v + 3 * grid_.node_count);
   if (band) s.band.assign(band, band + 3 * grid_.band_count);
+  if (graph_.v_before >= 0) {
+    const double* before = interpreter_->store().data(graph_.v_before, b);
+    s.v_before.assign(before, before + 3 * grid_.node_count);
+  }
   return s;
 }
 
@@ -351,6 +360,9 @@ void Simulation::set_state(int b, const State& s, int step) {
     else
       std::copy(s.band.begin(), s.band.end(), st.data(graph_.band_guess, b));
   }
+  if (graph_.v_before >= 0)  // without it, no acceleration carried on
+    std::copy(s.v_before.empty() ? s.v.begin() : s.v_before.begin(), s.v_before.empty() ? s.v.end() : s.v_before.end(),
+              st.data(graph_.v_before, b));
   steps_ = step;
   band_current_ = true;
 }

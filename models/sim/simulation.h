@@ -101,6 +101,7 @@ class Simulation {
   // The state of one batch item (what the adjoint stores per step), and its restoration.
   struct State {
     std::vector<double> u, v, band;
+    std::vector<double> v_before;  // v a step earlier (the solve's start), where the graph keeps it
   };
   State state(int b) const;
   void set_state(int b, const State& s, int step);
@@ -133,7 +134,7 @@ class Simulation {
   void require_host_state() const;
   void advance(bool to_host, int keep_key, bool extend);
   void run_step(bool extend);
-  std::vector<int> state_tensors() const;  // u_prev, v_prev and, with extension, band_guess
+  std::vector<int> state_tensors() const;  // u_prev, v_prev and, with the extension, band_guess; v_before
   std::vector<int> step_tensors() const;   // every state and intermediate tensor
   void keep(int key, const std::vector<int>& tensors, int step);
   void restore(int key);

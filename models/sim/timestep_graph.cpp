@@ -195,6 +195,10 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
                                        OpArg{"fixed", t.fixed, A::Opaque}};
     if (step_damping >= 0) solve_inputs.push_back(OpArg{"damping", step_damping, A::Opaque});
     if (guess >= 0) solve_inputs.push_back(OpArg{"guess", guess, A::Opaque});
+    if (!iterating) {  // a nonlinear iteration starts from its iterate, which also places the contact
+      t.v_before = g.add_state("v_before", D::Node, 3);
+      solve_inputs.push_back(OpArg{"v_before", t.v_before, A::Opaque});
+    }
     solve_inputs.insert(solve_inputs.end(), newmark_scalars.begin(), newmark_scalars.end());
     const std::string u_name = last ? "u" : "u_it" + std::to_string(k + 1);
     const std::string cg_name = last ? "cg_iterations" : "cg_iterations_it" + std::to_string(k + 1);

@@ -15,6 +15,7 @@ struct TimestepGraph {
   bool neo_hookean = false;                         // the elastic energy is the Neo-Hookean one
   // State read by the step and its successors written by it.
   int u_prev, v_prev, band_guess = -1;
+  int v_before = -1;  // v_prev a step earlier, for the solve's start (a step of one solve only)
   int u, v, band_u = -1, rotation, mass, lambda, mu, cg_iterations;
   // The band extension's op, the graph's last (-1 without): a step no cost observes runs the
   // ops before it alone (StepBackend::run_prefix).

@@ -3,9 +3,11 @@
 # peer's table phase on its dragon (forward and jax.grad, f64 and f32, batch 1 and 32) and ssc's
 # step benchmarks on the identical scene (the peer's ssc-scene-dragon.json; the CPU steps too),
 # then the ratio table of docs/benchmarks.md. The peer has no band extension: its step is
-# ssc's unobserved step (GpuUnobserved{Forward,Adjoint}Step), which the ratios compare; the
-# observed step (GpuForwardStep, GpuAdjointStep: with the extension, once per observed frame
-# in a fit) is shown beside it.
+# ssc's unobserved step, which the ratios compare. Both forward figures are averages over a
+# 40-step trajectory from rest (the peer's rollout, ssc's GpuUnobservedRollout), the adjoint
+# ssc's GpuUnobservedAdjointStep (its solves warm-start from the later step, whatever the
+# forward's start). The observed step (GpuForwardStep, GpuAdjointStep: with the extension,
+# once per observed frame in a fit; one step, the 6th, repeated) is shown beside it.
 # Usage: tools/bench/peer-compare.sh BUILD_DIR PEER_DIR [OUT_DIR]
 #   PEER_DIR: a copy of the peer (bench.py, its grid files and ssc-scene-dragon.json with its .sdf)
 set -uo pipefail
@@ -35,7 +37,7 @@ for dtype, real in (("f64", "double"), ("f32", "float")):
         r = next((x for x in jax if x["dtype"] == dtype and x["batch"] == batch and x["scene"] == "dragon"), None)
         if not r:
             continue
-        f = ms(f"GpuUnobservedForwardStep/peer-dragon/{real}/{batch}/real_time")
+        f = ms(f"GpuUnobservedRollout/peer-dragon/{real}/{batch}/manual_time")
         a = ms(f"GpuUnobservedAdjointStep/peer-dragon/{real}/{batch}/real_time")
         of = ms(f"GpuForwardStep/peer-dragon/{real}/{batch}/real_time")
         oa = ms(f"GpuAdjointStep/peer-dragon/{real}/{batch}/real_time")
