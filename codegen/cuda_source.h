@@ -20,6 +20,9 @@ struct CodegenOptions {
   std::string real = "double";  // "double" or "float"
   int block_size = 128;
   int item_block = kItemBlock;  // threads of an Extent::Item kernel (SSC_ITEM)
+  // Blocks of a persistent grid kernel each multiprocessor must hold (the second
+  // __launch_bounds__ argument, SSC_GRID_MIN_BLOCKS): more caps its registers.
+  int grid_min_blocks = 1;
 };
 
 // The shared prelude (headers and helpers).

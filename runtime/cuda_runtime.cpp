@@ -180,7 +180,11 @@ void GpuTimestep::Impl::upload_grid() {
 void GpuTimestep::Impl::compile_and_load(const std::vector<const PlannedKernel*>& kernels) {
   std::vector<KernelSource> sources;
   for (const PlannedKernel* k : kernels)
-    if (!k->duplicate && !functions.count(k->name)) sources.push_back({k->name, kernel_source(*k, {options.real, kBlock})});
+    if (!k->duplicate && !functions.count(k->name)) {
+      CodegenOptions co{options.real, kBlock};
+      co.grid_min_blocks = grid_min_blocks;
+      sources.push_back({k->name, kernel_source(*k, co)});
+    }
   NvrtcOptions no;
   no.arch = options.arch;
   no.fmad = options.fmad;
@@ -250,6 +254,7 @@ void GpuTimestep::Impl::setup() {
   plane_count = graph.plane_count();
 
   plan = plan_kernels(graph);
+  decide_grid_min_blocks();
   std::vector<const PlannedKernel*> forward;
   for (const PlannedKernel& k : plan.forward) forward.push_back(&k);
   compile_and_load(forward);
@@ -308,6 +313,20 @@ void GpuTimestep::Impl::decide_grid_solves() {
   if (phases != 1 && phases != 2)
     phases = 2L * grid_blocks(*one_phase, sizes.band) * kGridBlock <= sizes.band ? 2 : 1;
   extension_grid = phases == 2 ? "extension_pcg_grid_two_phase" : "extension_pcg_grid";
+}
+
+// The persistent solves' register cap. Uncapped (over 128 registers), they hold one block per
+// multiprocessor; where the batch wants several times more blocks (one thread per cell
+// corner), each block loops over several corners and the solve is throughput-bound, and three
+// blocks per multiprocessor (at most 85 registers) hide more latency. Measured on an H100
+// (docs/benchmarks.md): the dragon at batch 32 (12x the multiprocessors) 1.26x faster forward,
+// 1.34x adjoint; at batch 1 the cap costs 11 %; the CalculiX cube at batch 16 (2.7x) gained
+// nothing, at batch 64 (11x) 6 %.
+void GpuTimestep::Impl::decide_grid_min_blocks() {
+  d->DeviceGetAttribute(&multiprocessors, cu::kAttrMultiprocessorCount, device);
+  const long wanted = wanted_blocks(std::max({8L * sizes.cell, long(sizes.node), long(sizes.band)})) * batch;
+  grid_min_blocks = options.grid_min_blocks > 0 ? options.grid_min_blocks : wanted > 4L * multiprocessors ? 3 : 1;
+  if (const char* e = std::getenv("SSC_GPU_GRID_MIN_BLOCKS")) grid_min_blocks = std::max(1, std::atoi(e));
 }
 
 // One node per thread (SSC_GPU_GRID_SPREAD=s: s per thread).

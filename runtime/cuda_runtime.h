@@ -71,6 +71,10 @@ struct GpuOptions {
   // (runtime/band_operator.h) fits kDenseExtensionBytes; else, or off, or with
   // SSC_GPU_DENSE_EXTENSION=0, the extension's PCG.
   bool dense_extension = true;
+  // Blocks per multiprocessor the persistent solves must fit (caps their registers): 0 picks
+  // 3 where the batch wants more than four blocks per multiprocessor, else 1
+  // (SSC_GPU_GRID_MIN_BLOCKS=n overrides).
+  int grid_min_blocks = 0;
 };
 
 struct GpuKernelTiming {

@@ -112,6 +112,7 @@ struct GpuTimestep::Impl {
   // item gets at least one block of each grid kernel (SSC_GPU_GRID_SOLVES=0: off).
   bool grid_solves = false;
   int multiprocessors = 0;
+  int grid_min_blocks = 1;  // the grid kernels' second __launch_bounds__ argument
   std::map<std::string, int> grid_capacity;  // per grid kernel: resident blocks on the device
   std::string extension_grid;                 // the extension's grid kernel (GpuOptions::extension_phases)
   // The extension as one product (GpuOptions::dense_extension), uploaded as g_band_operator
@@ -159,6 +160,7 @@ struct GpuTimestep::Impl {
   void synchronize(const char* what);
   // Blocks per item a grid kernel over `work` nodes would take with the device to itself.
   long wanted_blocks(long work) const;
+  void decide_grid_min_blocks();
   // iterations_out: assigned the solve's iterations per item, or added to with reference_mode != 0
   // (the step's adjoint time-step solves, summed).
   void grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it, cu::DevicePtr iterations,
