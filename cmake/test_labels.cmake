@@ -21,7 +21,7 @@ set(SSC_TESTS_unit
   OptimBest OptimConvergence OptimFactory OptimRules OptimStopping ParameterSpaceNames ParameterSpaceTransforms
   ReconstructionStarts LevenbergMarquardt ParameterBounds
   ExtensionTable PlausibleRanges DiagnosisModels DiagnosisNaming SupportedSpan RunRecord WriteErrors MeasurementCorrection SvgPlot
-  Layering OutputFolder ParameterNames ParameterTable Pcg BandFactor ReportHtml SceneFiles Units
+  Layering OutputFolder ParameterNames ParameterTable Pcg BandFactor ElementPacks ReportHtml SceneFiles Units
   NvrtcCache NvrtcCompile ByteRecord BatchWorkers ComputeDevice
   RecordingReaders FrameTiming PlaneFit WorldFrame ScanRegistration MotionEstimate Segmentation ObjectSelection
   GpuForward.ReportsMissingGpuCleanly GpuKernels.GroupsCoverThePlanOnce)

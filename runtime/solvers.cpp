@@ -3,6 +3,9 @@
 
 #include <fmt/format.h>
 
+#include <cstdlib>
+#include <type_traits>
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -12,6 +15,7 @@
 #include "ops/newmark.h"
 #include "runtime/errors.h"
 #include "runtime/band_factor.h"
+#include "runtime/element_packs.h"
 #include "runtime/pcg.h"
 #include "runtime/system_dump.h"
 
@@ -57,6 +61,13 @@ struct NewmarkSystem {
   }
 
   void cell_apply(const Real* p, Real* corner) const {
+    if constexpr (std::is_same_v<Real, double>) {  // four cells at a time (runtime/element_packs.h)
+      static const bool scalar = std::getenv("SSC_CPU_SCALAR_APPLY") != nullptr;  // for comparisons
+      if (!scalar) {
+        stiffness_apply_cells(g.cell_count, g.h, rotation, weights, lambda, mu, p, g.cell_nodes.data(), corner);
+        return;
+      }
+    }
     const ops::PartContext<Real> cx{Real(g.h), g.cell_count, g.node_count, 0, 0, 0};
 #pragma omp parallel for schedule(static) if (g.cell_count >= kCellParallelThreshold)
     for (int e = 0; e < g.cell_count; ++e)
