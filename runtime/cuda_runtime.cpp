@@ -319,8 +319,8 @@ void GpuTimestep::Impl::decide_grid_solves() {
 // multiprocessor; where the batch wants several times more blocks (one thread per cell
 // corner), each block loops over several corners and the solve is throughput-bound, and three
 // blocks per multiprocessor (at most 85 registers) hide more latency. Measured on an H100
-// (docs/benchmarks.md): the dragon at batch 32 (12x the multiprocessors) 1.26x faster forward,
-// 1.34x adjoint; at batch 1 the cap costs 11 %; the CalculiX cube at batch 16 (2.7x) gained
+// (docs/benchmarks.md): the dragon at batch 32 (12x the multiprocessors) 1.30x faster forward,
+// 1.35x adjoint; at batch 1 the cap costs 11 %; the CalculiX cube at batch 16 (2.7x) gained
 // nothing, at batch 64 (11x) 6 %.
 void GpuTimestep::Impl::decide_grid_min_blocks() {
   d->DeviceGetAttribute(&multiprocessors, cu::kAttrMultiprocessorCount, device);

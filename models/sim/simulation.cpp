@@ -360,9 +360,10 @@ void Simulation::set_state(int b, const State& s, int step) {
     else
       std::copy(s.band.begin(), s.band.end(), st.data(graph_.band_guess, b));
   }
-  if (graph_.v_before >= 0)  // without it, no acceleration carried on
-    std::copy(s.v_before.empty() ? s.v.begin() : s.v_before.begin(), s.v_before.empty() ? s.v.end() : s.v_before.end(),
-              st.data(graph_.v_before, b));
+  if (graph_.v_before >= 0) {
+    const std::vector<double>& before = s.v_before.empty() ? s.v : s.v_before;  // none: no acceleration carried on
+    std::copy(before.begin(), before.end(), st.data(graph_.v_before, b));
+  }
   steps_ = step;
   band_current_ = true;
 }
