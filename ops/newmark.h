@@ -200,7 +200,7 @@ SSC_HD inline void adj_newmark_rhs_node(int i, const PartContext<Real>&, const R
 // The time-step solve's start without a guess, component k of node i: u- + dt v-, plus
 // theta dt (v- - v_before) where the velocity a step earlier is known (v_before != nullptr):
 // the last step's acceleration carried on, as the scheme's u = u- + dt v- + theta dt (v - v-)
-// would have it (89 -> 74 CG iterations a step on the paper's dragon, docs/benchmarks.md).
+// would have it (88.9 -> 72.6 CG iterations a step on the paper's dragon, docs/benchmarks.md).
 template <class Real>
 SSC_HD inline Real newmark_start(Real dt, Real theta, const Real* u_prev, const Real* v_prev, const Real* v_before,
                                  int k) {
