@@ -4,12 +4,10 @@
 // threads for every SM). The kernels go through the same NVRTC and driver-API runtime
 // as the generated ones; each timed iteration is one launch and a synchronisation.
 #include <benchmark/benchmark.h>
-#include <fmt/format.h>
 
 #include <string>
 
-#include "runtime/cuda_driver.h"
-#include "runtime/nvrtc_compiler.h"
+#include "tools/bench/bench_device.h"
 
 namespace ssc {
 namespace {
@@ -31,38 +29,14 @@ extern "C" __global__ void rate_fma(double* out, int iterations, double a, doubl
 }
 )";
 
-// The device, its context and the two kernels, set up once.
-struct RateDevice {
-  const cu::Driver* d = nullptr;
-  cu::Context ctx = nullptr;
+// The device and the two kernels, set up once.
+struct RateDevice : BenchDevice {
   cu::Function copy = nullptr, fma = nullptr;
-  int multiprocessors = 0;
-  std::string why;
 
   RateDevice() {
-    d = cu::driver(&why);
     if (!d) return;
-    if (!nvrtc_available()) {
-      why = "ssc was built without NVRTC";
-      d = nullptr;
-      return;
-    }
-    cu::Device device = 0;
-    cu::check(d->DeviceGet(&device, 0), "cuDeviceGet");
-    cu::check(d->DevicePrimaryCtxRetain(&ctx, device), "cuDevicePrimaryCtxRetain");
-    cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
-    int major = 0, minor = 0;
-    d->DeviceGetAttribute(&major, cu::kAttrComputeCapabilityMajor, device);
-    d->DeviceGetAttribute(&minor, cu::kAttrComputeCapabilityMinor, device);
-    d->DeviceGetAttribute(&multiprocessors, cu::kAttrMultiprocessorCount, device);
-    NvrtcOptions o;
-    o.arch = fmt::format("sm_{}{}", major, minor);
-    for (const char* name : {"rate_copy", "rate_fma"}) {
-      const CompiledKernel k = compile_kernel(name, kRateKernels, o);
-      cu::Module m = nullptr;
-      cu::check(d->ModuleLoadData(&m, k.image.data()), "cuModuleLoadData");
-      cu::check(d->ModuleGetFunction(std::string(name) == "rate_copy" ? &copy : &fma, m, name), "cuModuleGetFunction");
-    }
+    copy = load("rate_copy", kRateKernels);
+    fma = load("rate_fma", kRateKernels);
   }
 };
 

@@ -6,14 +6,12 @@
 // Each launch runs `kSteps` of them back to back; the counter `per_step` is the time of
 // one (launch overhead shared out over the steps).
 #include <benchmark/benchmark.h>
-#include <fmt/format.h>
 
 #include <string>
 
 #include "codegen/cuda_source.h"
 #include "codegen/op_snippets.h"
-#include "runtime/cuda_driver.h"
-#include "runtime/nvrtc_compiler.h"
+#include "tools/bench/bench_device.h"
 
 namespace ssc {
 namespace {
@@ -121,41 +119,18 @@ extern "C" __global__ void __launch_bounds__(1024) cluster_phases(int steps, dou
 const char* const kNames[] = {"grid_barriers", "grid_sums", "grid_phases", "cluster_barriers", "cluster_sums",
                               "cluster_phases"};
 
-struct SyncDevice {
-  const cu::Driver* d = nullptr;
-  cu::Context ctx = nullptr;
+struct SyncDevice : BenchDevice {
   cu::Function f[6] = {};
   cu::DevicePtr scratch = 0;  // barrier counter, partial sums, the phase vectors
-  int multiprocessors = 0;
   bool clusters = false;
-  std::string why;
 
   SyncDevice() {
-    d = cu::driver(&why);
     if (!d) return;
-    if (!nvrtc_available()) {
-      why = "ssc was built without NVRTC";
-      d = nullptr;
-      return;
-    }
-    cu::Device device = 0;
-    cu::check(d->DeviceGet(&device, 0), "cuDeviceGet");
-    cu::check(d->DevicePrimaryCtxRetain(&ctx, device), "cuDevicePrimaryCtxRetain");
-    cu::check(d->CtxSetCurrent(ctx), "cuCtxSetCurrent");
-    int major = 0, minor = 0;
-    d->DeviceGetAttribute(&major, cu::kAttrComputeCapabilityMajor, device);
-    d->DeviceGetAttribute(&minor, cu::kAttrComputeCapabilityMinor, device);
-    d->DeviceGetAttribute(&multiprocessors, cu::kAttrMultiprocessorCount, device);
     clusters = major >= 9 && d->has_clusters();
-    NvrtcOptions o;
-    o.arch = fmt::format("sm_{}{}", major, minor);
     const std::string source = kernel_prelude(CodegenOptions{}) + kSyncKernels;
     for (int k = 0; k < 6; ++k) {
       if (k >= 3 && !clusters) break;
-      const CompiledKernel c = compile_kernel(kNames[k], source, o);
-      cu::Module m = nullptr;
-      cu::check(d->ModuleLoadData(&m, c.image.data()), "cuModuleLoadData");
-      cu::check(d->ModuleGetFunction(&f[k], m, kNames[k]), "cuModuleGetFunction");
+      f[k] = load(kNames[k], source);
       if (k >= 3) cu::check(d->FuncSetAttribute(f[k], cu::kFuncAttrNonPortableClusterSize, 1), "cuFuncSetAttribute");
     }
     cu::check(d->MemAlloc(&scratch, 8u << 20), "cuMemAlloc");
