@@ -154,7 +154,9 @@ TEST_F(DiagnoseCli, NamesFrictionHiddenInDataFromASmallerTimeStep) {
     EXPECT_LE(s["low"].get<double>(), s["fitted"].get<double>()) << s["parameter"];
     EXPECT_GE(s["high"].get<double>(), s["fitted"].get<double>()) << s["parameter"];
     EXPECT_EQ(s["values"].size(), s["costs"].size());
-    if (s["parameter"] == "ground.friction") EXPECT_FALSE(s["open_low"] || s["open_high"]);
+    if (s["parameter"] == "ground.friction") {
+      EXPECT_FALSE(s["open_low"] || s["open_high"]);
+    }
   }
   const std::string html = [&] {
     std::ifstream in(dir_ / "diag" / "report.html");
