@@ -145,6 +145,37 @@ TEST(LevenbergMarquardt, FailedEvaluations) {
   EXPECT_NEAR(later.best_point()[0], 0.5, 1e-6);
 }
 
+TEST(LevenbergMarquardt, AnAxisPushedAgainstItsBoundIsHeldThere) {
+  // x = 1.5 sigmoid(z0) (a plausible range [0, 1.5]) wants 2, beyond the bound; y = z1 wants
+  // 0.3, coupled to x as E is to a drag coefficient. With the axis marked bounded the fit holds x
+  // at the bound once saturated and converges on y; unmarked it creeps towards z0 = infinity.
+  const auto sigmoid = [](double z) { return 1 / (1 + std::exp(-z)); };
+  const Residuals f = [&](const Vec& z) {
+    const double x = 1.5 * sigmoid(z[0]);
+    return vec({x - 2, z[1] - 0.3 + 0.2 * (x - 2), 0.1 * (z[1] - 0.3)});
+  };
+  OptimizerOptions o;
+  o.max_iterations = 30;
+  LevenbergMarquardt held(vec({0.0, 0.0}), o, 1e-7, {1, 0});
+  drive(held, f);
+  EXPECT_TRUE(held.converged()) << held.stop_reason();
+  EXPECT_EQ(held.held_at_bound(), 1);
+  EXPECT_GE(1.5 * sigmoid(held.best_point()[0]), 1.5 * (1 - 1.1e-3));
+  EXPECT_LT(held.iterations(), 15);
+  LevenbergMarquardt creeping(vec({0.0, 0.0}), o, 1e-7);
+  drive(creeping, f);
+  EXPECT_GT(creeping.iterations(), held.iterations());
+  EXPECT_EQ(creeping.held_at_bound(), 0);
+
+  // Saturated at the start but pulled inward (the minimum at x = 0.75): released, and it gets there.
+  const Residuals inward = [&](const Vec& z) { return vec({1.5 * sigmoid(z[0]) - 0.75, z[1] - 0.3}); };
+  LevenbergMarquardt released(vec({8.0, 0.0}), o, 1e-7, {1, 0});
+  drive(released, inward);
+  EXPECT_TRUE(released.converged()) << released.stop_reason();
+  EXPECT_NEAR(1.5 * sigmoid(released.best_point()[0]), 0.75, 1e-6);
+  EXPECT_EQ(released.held_at_bound(), 0);
+}
+
 // ---- explicit bounds on the axes --------------------------------------------------------
 
 ParameterAxis axis(const std::string& name, ParameterAxis::Kind kind) {
@@ -217,10 +248,11 @@ TEST(ParameterBounds, OpenEndsAndBadBounds) {
 TEST(ParameterBounds, LevenbergMarquardtStopsOnTheBoundItCannotPass) {
   // r = x - 500 on a logarithmic axis [1, 100] and r = x - 5 on a linear one [0, 2]: the
   // minimum within the bounds is the upper bound; no point asked ever lies beyond it, and the
-  // fit ends there with a converged reason. Started on the lower bound's 2 % margin.
+  // fit ends there with a converged reason, both axes held at their bounds. Started on the
+  // lower bound's 2 % margin.
   const ParameterSpace space({with_bounds(axis("youngs_modulus", ParameterAxis::Kind::Positive), 1, 100),
                               with_bounds(axis("ground.height", ParameterAxis::Kind::Free), 0, 2)});
-  LevenbergMarquardt lm(space.to_internal(vec({std::pow(100.0, 0.02), 0.04})), OptimizerOptions{}, 1e-4);
+  LevenbergMarquardt lm(space.to_internal(vec({std::pow(100.0, 0.02), 0.04})), OptimizerOptions{}, 1e-4, {1, 1});
   double highest0 = 0, highest1 = 0;
   drive(
       lm, [&](const Vec& z) { const Vec x = space.to_physical(z); return vec({x[0] - 500, x[1] - 5}); },
@@ -236,6 +268,8 @@ TEST(ParameterBounds, LevenbergMarquardtStopsOnTheBoundItCannotPass) {
   EXPECT_LE(highest1, 2.0);
   EXPECT_GT(x[0], 99.0);
   EXPECT_GT(x[1], 1.98);
+  EXPECT_EQ(lm.held_at_bound(), 2);
+  EXPECT_LE(lm.iterations(), 20);  // 39 before an axis was held at its bound
 }
 
 }  // namespace

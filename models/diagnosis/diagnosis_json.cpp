@@ -20,7 +20,13 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   j["heldout_frames"] = d.heldout_frames;
   j["heldout_from_s"] = d.heldout_from;
   auto convergence = [](const FittedModel& m) {
-    return nlohmann::json{{"stop_reason", m.stop_reason}, {"converged_starts", m.converged_starts}, {"starts", m.starts}};
+    nlohmann::json per_start = nlohmann::json::array();
+    for (const FitStart& s : m.per_start)
+      per_start.push_back({{"stop_reason", s.stop_reason}, {"iterations", s.iterations}, {"costs", s.costs}});
+    return nlohmann::json{{"stop_reason", m.stop_reason},
+                          {"converged_starts", m.converged_starts},
+                          {"starts", m.starts},
+                          {"per_start", per_start}};
   };
   j["base"] = {{"parameters", named(d.base, false, nullptr)},
                {"heldin_cost", d.base.heldin_cost},

@@ -27,6 +27,14 @@ struct DiagnosisOptions {
   bool discretization_controls = true;
 };
 
+// How one start of a fit ended: its stop reason, accepted iterations, and the held-in cost after
+// each (the first entry at the start point).
+struct FitStart {
+  std::string stop_reason;
+  int iterations = 0;
+  std::vector<double> costs;
+};
+
 // One fitted model (the base, a candidate or a placebo).
 struct FittedModel {
   std::string name;
@@ -40,6 +48,7 @@ struct FittedModel {
   std::string failure, note;
   std::string stop_reason;         // of the best start
   int starts = 0, converged_starts = 0;
+  std::vector<FitStart> per_start;
   std::string proposal;            // what the data proposed (a plane, an interface), if anything
   double seconds = 0;
 };

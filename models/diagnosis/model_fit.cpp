@@ -201,7 +201,10 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
     fm.values.resize(Eigen::Index(fm.names.size()));
     for (size_t i = 0; i < fm.names.size(); ++i) fm.values[Eigen::Index(i)] = start.final[index_of(fm.names[i])];
     fm.stop_reason = start.stop_reason;
-    for (size_t s = m * S; s < (m + 1) * S; ++s) fm.converged_starts += stopped_converged(r.starts[s].stop_reason);
+    for (size_t s = m * S; s < (m + 1) * S; ++s) {
+      fm.converged_starts += stopped_converged(r.starts[s].stop_reason);
+      fm.per_start.push_back({r.starts[s].stop_reason, r.starts[s].iterations, r.starts[s].cost_history});
+    }
     fm.starts = int(S);
     if (start.stop_reason == "iteration limit")
       fm.note = fmt::format("the fit stopped at the iteration limit ({} iterations)", o.iterations);

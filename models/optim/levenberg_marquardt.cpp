@@ -15,8 +15,30 @@ constexpr double kMinDamping = 1e-12;
 
 }  // namespace
 
-LevenbergMarquardt::LevenbergMarquardt(const Eigen::VectorXd& start, const OptimizerOptions& options, double fd_step)
-    : o_(options), h_(fd_step), z_(start), trial_(start), scale_(Eigen::VectorXd::Zero(start.size())) {}
+LevenbergMarquardt::LevenbergMarquardt(const Eigen::VectorXd& start, const OptimizerOptions& options, double fd_step,
+                                       std::vector<char> bounded)
+    : o_(options), h_(fd_step), z_(start), trial_(start), scale_(Eigen::VectorXd::Zero(start.size())),
+      bounded_(std::move(bounded)) {
+  if (!bounded_.empty() && bounded_.size() != size_t(start.size()))
+    throw std::logic_error("LevenbergMarquardt: one bounded flag per axis");
+}
+
+bool LevenbergMarquardt::held(Eigen::Index j) const {
+  return !bounded_.empty() && bounded_[size_t(j)] && std::abs(z_[j]) >= kSaturated && g_[j] * z_[j] < 0;
+}
+
+int LevenbergMarquardt::held_at_bound() const {
+  int n = 0;
+  for (Eigen::Index j = 0; j < z_.size(); ++j) n += g_.size() == z_.size() && held(j);
+  return n;
+}
+
+double LevenbergMarquardt::projected_gradient_norm() const {
+  double sum = 0;
+  for (Eigen::Index j = 0; j < g_.size(); ++j)
+    if (!held(j)) sum += g_[j] * g_[j];
+  return std::sqrt(sum);
+}
 
 std::vector<Eigen::VectorXd> LevenbergMarquardt::ask() const {
   std::vector<Eigen::VectorXd> points(size_t(z_.size()) + 1, trial_);
@@ -42,7 +64,7 @@ void LevenbergMarquardt::tell(const std::vector<ResidualVector>& values, const s
     }
     started_ = accepted_ = true;
     take(values);
-    if (g_.norm() <= o_.gradient_tolerance) reason_ = "converged: gradient";
+    if (projected_gradient_norm() <= o_.gradient_tolerance) reason_ = "converged: gradient";
   } else if (cost < cost_) {  // rho > 0
     const double before = cost_, predicted = predicted_, rho = (cost_ - cost) / predicted_;
     z_ = trial_;
@@ -52,7 +74,7 @@ void LevenbergMarquardt::tell(const std::vector<ResidualVector>& values, const s
     accepted_ = true;
     lambda_ = std::max(kMinDamping, lambda_ * std::max(1.0 / 3.0, 1 - std::pow(2 * rho - 1, 3)));
     nu_ = 2;
-    if (g_.norm() <= o_.gradient_tolerance)
+    if (projected_gradient_norm() <= o_.gradient_tolerance)
       reason_ = "converged: gradient";
     else if (before - cost <= o_.relative_tolerance * before && predicted <= o_.relative_tolerance * before)
       reason_ = "converged: relative cost change < tol";
@@ -89,9 +111,24 @@ void LevenbergMarquardt::take(const std::vector<ResidualVector>& values) {
 void LevenbergMarquardt::propose() {
   const Eigen::MatrixXd JtJ = J_.transpose() * J_;
   const double largest = scale_.maxCoeff();
-  Eigen::MatrixXd A = JtJ;
-  for (Eigen::Index j = 0; j < z_.size(); ++j) A(j, j) += lambda_ * std::max(scale_[j], 1e-12 * largest);
-  Eigen::VectorXd dz = A.ldlt().solve(-g_);
+  std::vector<Eigen::Index> free;
+  for (Eigen::Index j = 0; j < z_.size(); ++j)
+    if (!held(j)) free.push_back(j);
+  if (free.empty()) {
+    reason_ = "converged: gradient";  // every axis at a bound it is pushed against
+    return;
+  }
+  const Eigen::Index m = Eigen::Index(free.size());
+  Eigen::MatrixXd A(m, m);
+  Eigen::VectorXd b(m);
+  for (Eigen::Index a = 0; a < m; ++a) {
+    b[a] = -g_[free[size_t(a)]];
+    for (Eigen::Index c = 0; c < m; ++c) A(a, c) = JtJ(free[size_t(a)], free[size_t(c)]);
+    A(a, a) += lambda_ * std::max(scale_[free[size_t(a)]], 1e-12 * largest);
+  }
+  const Eigen::VectorXd step = A.ldlt().solve(b);
+  Eigen::VectorXd dz = Eigen::VectorXd::Zero(z_.size());
+  for (Eigen::Index a = 0; a < m; ++a) dz[free[size_t(a)]] = step[a];
   // A nearly flat axis (a parameter near its bound, where the sigmoid saturates) would get a
   // long step that lands deep in the flat part; the step keeps its direction but is shortened.
   const double longest = dz.cwiseAbs().maxCoeff();

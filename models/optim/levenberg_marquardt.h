@@ -25,6 +25,13 @@
 //   "failed: non-finite step"                  the damped system had no finite solution
 //   "failed: no decrease after 30 damping increases"
 // A failed trial or probe (a simulation that exploded at a long step) counts as a rejected step.
+//
+// Bounds (a projected step): an axis marked bounded runs its parameter through a sigmoid, so the
+// bound itself lies at z = +-infinity and a fit that wants a value beyond it would creep there
+// until the iteration limit. Such an axis is held once it is saturated (|z| >= kSaturated: the
+// parameter within 1e-3 of its range's end) and the gradient pushes it further out; the step
+// and the convergence tests then run over the other axes (the gradient test on the projected
+// gradient). It is released when the gradient turns inward.
 #pragma once
 #include <Eigen/Core>
 #include <string>
@@ -43,7 +50,10 @@ struct ResidualVector {
 
 class LevenbergMarquardt {
  public:
-  LevenbergMarquardt(const Eigen::VectorXd& start, const OptimizerOptions& options, double fd_step);
+  // bounded: per axis, whether it is a sigmoid (bounded) axis; empty: none.
+  LevenbergMarquardt(const Eigen::VectorXd& start, const OptimizerOptions& options, double fd_step,
+                     std::vector<char> bounded = {});
+  static constexpr double kSaturated = 6.9;  // sigmoid(6.9) = 1 - 1.0e-3
   // The points to evaluate next: the trial point, then trial + fd_step e_j, j = 0..n-1.
   std::vector<Eigen::VectorXd> ask() const;
   // Their residual vectors, in that order; `failure` non-empty when any of them failed (the
@@ -60,6 +70,8 @@ class LevenbergMarquardt {
   const Eigen::VectorXd& best_point() const { return z_; }
   double best_cost() const { return cost_; }
   double gradient_norm() const { return g_.norm(); }
+  // The axes held at a bound in the last step proposed.
+  int held_at_bound() const;
   bool accepted() const { return accepted_; }
   const Eigen::MatrixXd& jacobian() const { return J_; }
   double damping() const { return lambda_; }
@@ -67,11 +79,14 @@ class LevenbergMarquardt {
  private:
   void take(const std::vector<ResidualVector>& values);
   void propose();
+  // Whether axis j is held at its bound at the current point (see the header comment).
+  bool held(Eigen::Index j) const;
+  double projected_gradient_norm() const;
 
   OptimizerOptions o_;
   double h_;
   Eigen::VectorXd z_, trial_, g_, r_, scale_;
-  std::vector<char> matched_;
+  std::vector<char> matched_, bounded_;
   Eigen::MatrixXd J_;
   double cost_ = 0, predicted_ = 0, lambda_ = 1e-3, nu_ = 2;
   int iterations_ = 0, rejections_ = 0;

@@ -163,8 +163,11 @@ void fit_least_squares(const Problem& problem, const ReconstructionOptions& o, c
   const SurfaceResiduals residuals(cost, problem.frames);
   const int S = int(spaces.size());
   std::vector<LevenbergMarquardt> lm;
-  for (int s = 0; s < S; ++s)
-    lm.emplace_back(spaces[s].to_internal(result.starts[s].initial), o.optimizer_options, o.fd_step);
+  for (int s = 0; s < S; ++s) {
+    std::vector<char> bounded;
+    for (const ParameterAxis& a : spaces[s].space().axes()) bounded.push_back(a.kind == ParameterAxis::Kind::Bounded);
+    lm.emplace_back(spaces[s].to_internal(result.starts[s].initial), o.optimizer_options, o.fd_step, bounded);
+  }
   for (int round = 0;; ++round) {
     std::vector<int> active;
     for (int s = 0; s < S; ++s)
