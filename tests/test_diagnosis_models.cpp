@@ -47,6 +47,17 @@ TEST(DiagnosisModels, TheFinerStepHalvesTheTimeStepOverTheSameDuration) {
   EXPECT_TRUE(has(spec.overrides, "time.steps=160"));
   EXPECT_TRUE(spec.extra.empty());
   EXPECT_EQ(discretization_controls(), (std::vector<std::string>{"finer_grid", "finer_step"}));
+  // theta 0.6 is a numerical damping of (theta - 1/2) dt: halved with the step, a quarter in
+  // all. The step does not iterate, so its iterations are left alone.
+  EXPECT_TRUE(has(spec.overrides, "time.theta=0.55"));
+  EXPECT_EQ(spec.overrides.size(), 3u);
+
+  scene.time.theta = 0.5;
+  scene.solver.implicit_contact = true;
+  scene.solver.nonlinear_iterations = 4;
+  const ModelSpec iterating = finer_step_spec(scene);
+  EXPECT_TRUE(has(iterating.overrides, "solver.nonlinear_iterations=8"));
+  for (const std::string& o : iterating.overrides) EXPECT_EQ(o.find("time.theta"), std::string::npos) << o;
 }
 
 TEST(DiagnosisModels, AGridThatCannotBeRefinedIsSkippedWithTheReason) {

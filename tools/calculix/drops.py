@@ -130,7 +130,9 @@ CASES = {
         E=8e4, half=(0.15, 0.05, 0.1), planes=[(0.0, 0.0, 0.0, None)], gap=0.04, velocity=(0.8, -1.5, 0.0),
         spin=(0.0, 0.0, -3.0), duration=0.35),
     "two_materials": dict(
-        what="the clean drop with a body of two halves: E = 50 kPa (x < 0, local) and 400 kPa (x > 0)",
+        what="the clean drop with a body of two materials, E = 50 kPa and 400 kPa, split across local x at the "
+             "element boundary nearest the middle (halves with an even count of elements per edge; with 3, "
+             "the soft third x < -h/3 and the stiff two thirds)",
         E=5e4, E_half=4e5, planes=[(TILT, 0.0, 0.0, None)], gap=0.04, velocity=(0.3, -1.5, 0.0),
         duration=0.35),
     "friction": dict(
@@ -168,6 +170,16 @@ CASES = {
 
 def half_extents(case):
     return case.get("half", (HALF,) * 3)
+
+
+def interface_x(case, elements):
+    """Local x of the two-material body's interface: the element boundary nearest the middle
+    on the soft side (0 for an even count of elements per edge, -h/3 for 3). The elements are
+    split by their centroids there and the ssc scene's region starts there, so that both codes
+    model the same body."""
+    h = half_extents(case)[0]
+    n = max(1, round(elements * h / HALF))
+    return -h + (n // 2) * 2 * h / n
 
 
 def node_velocity(case, centre, x):
@@ -303,7 +315,8 @@ def run_case(name, case, out, elements, contact, dt_max):
     os.makedirs(out, exist_ok=True)
     mesh = body_mesh(case, elements)
     mesh_file = "mesh_%s.inp" % name
-    elsets = [("SOFT", lambda c: c[0] < 0), ("STIFF", lambda c: c[0] > 0)]
+    split = interface_x(case, elements)
+    elsets = [("SOFT", lambda c: c[0] < split), ("STIFF", lambda c: c[0] > split)]
     mesh.write(os.path.join(out, mesh_file), elsets)
     tris = surface_triangles(mesh)
     surface = sorted({v for t in tris for v in t})
@@ -341,7 +354,7 @@ def run_case(name, case, out, elements, contact, dt_max):
 # the ssc side: scene and cameras
 
 
-def scene_json(name, case, cell_size):
+def scene_json(name, case, cell_size, elements):
     """The same set-up as an ssc scene (docs/scene-format.md).  ssc's contact is a penalty
     with a soft minimum; its stiffness is ccx's and its soft-min sharpness is chosen so that
     the force builds up within 0.2 mm (alpha = 5e3 1/m), with the contact solved within the
@@ -356,7 +369,8 @@ def scene_json(name, case, cell_size):
         material["model"] = "neo_hookean"
     if "E_half" in case:
         axis = mat_vec(R, (1.0, 0.0, 0.0))
-        material["regions"] = [{"normal": list(axis), "offset": dot(axis, centre), "youngs_modulus": case["E_half"]}]
+        offset = dot(axis, centre) + interface_x(case, elements)
+        material["regions"] = [{"normal": list(axis), "offset": offset, "youngs_modulus": case["E_half"]}]
     planes = []
     for k, (polar_k, azimuth_k, height_k, mu) in enumerate(case["planes"]):
         if k == 0 and case["gap"] < 0:  # a resting start: at ssc's contact equilibrium, where ccx's body rests
@@ -423,7 +437,7 @@ def make_case(name, a):
         case["duration"] = a.duration
     out = os.path.join(a.out, name)
     info = run_case(name, case, out, a.elements, case.get("contact", a.contact), a.dt)
-    scene = scene_json(name, case, a.cell_size)
+    scene = scene_json(name, case, a.cell_size, a.elements)
     scene["time"]["steps"] = (info["frames"] - 1) * 10
     write_json(os.path.join(out, "scene.json"), scene)
     info.update({"what": case["what"], "ccx_version": references.ccx_version(), "element": references.ELEMENT,
