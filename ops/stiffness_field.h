@@ -1,11 +1,13 @@
 // A heterogeneous body's Young's modulus per cell (the "heterogeneous_stiffness" extension):
-//   E_cell = E_r * exp(g . o_cell),
-// E_r the modulus of the cell's region (region_youngs[r], static cell_region; r = -1: the
-// body's youngs_modulus), g the stiffness gradient (1/m) and o_cell the cell's rest centre
-// minus the body's rest centre of mass (static cell_offset). A cut cell's centre is the
-// centroid of its inside part, sum_c w_c x_c / sum_c w_c with the cut-cell corner weights;
-// its region is the one that contains that centroid. Without regions every cell takes
-// youngs_modulus, without a gradient the factor is 1. The lame op (ops/elasticity.h) turns
+//   E_cell = (s_0 E + sum_r s_r E_r) * exp(g . o_cell),
+// s_r the fraction of the cell's inside part in material region r (static cell_region_share,
+// region_count[0] per cell), s_0 = 1 - sum_r s_r the rest, at the body's youngs_modulus E, g the
+// stiffness gradient (1/m) and o_cell the cell's rest centre minus the body's rest centre of mass
+// (static cell_offset). The volume-weighted modulus is what integrating a modulus that jumps
+// inside the cell over the cell gives where the strain is uniform in it; a cell wholly in one
+// region takes that region's modulus exactly. A cut cell's centre is the centroid of its inside
+// part, sum_c w_c x_c / sum_c w_c with the cut-cell corner weights. Without regions every cell
+// takes youngs_modulus, without a gradient the factor is 1. The lame op (ops/elasticity.h) turns
 // E_cell into the cell's Lame parameters.
 #pragma once
 #include "ops/gather.h"
@@ -20,12 +22,27 @@ SSC_HD inline Real stiffness_factor(const Real* stiffness_gradient, const Real* 
   return stiffness_gradient ? exp(dot(load3(stiffness_gradient, 0), load3(cell_offset, i))) : Real(1);
 }
 
+// The cell's modulus before the gradient's factor: its regions' moduli weighted by their shares.
+template <class Real>
+SSC_HD inline Real mixed_youngs(const Real* youngs_modulus, const Real* region_youngs, const Real* cell_region_share,
+                                const int* region_count, int i) {
+  if (!region_youngs) return youngs_modulus[0];
+  const int R = region_count[0];
+  Real rest = Real(1), mixed = Real(0);
+  for (int k = 0; k < R; ++k) {
+    rest -= cell_region_share[R * i + k];
+    mixed += cell_region_share[R * i + k] * region_youngs[k];
+  }
+  return rest * youngs_modulus[0] + mixed;
+}
+
 template <class Real>
 SSC_HD inline void stiffness_field_cell(int i, const PartContext<Real>&, const Real* youngs_modulus,
-                                        const Real* region_youngs, const Real* stiffness_gradient, const int* cell_region,
+                                        const Real* region_youngs, const Real* stiffness_gradient,
+                                        const Real* cell_region_share, const int* region_count,
                                         const Real* cell_offset, Real* cell_youngs) {
-  const int r = region_youngs ? cell_region[i] : -1;
-  cell_youngs[i] = (r >= 0 ? region_youngs[r] : youngs_modulus[0]) * stiffness_factor(stiffness_gradient, cell_offset, i);
+  cell_youngs[i] = mixed_youngs(youngs_modulus, region_youngs, cell_region_share, region_count, i) *
+                   stiffness_factor(stiffness_gradient, cell_offset, i);
 }
 
 // The cell's shares (double, summed by reduction parts) of the cotangents of youngs_modulus
@@ -34,19 +51,24 @@ SSC_HD inline void stiffness_field_cell(int i, const PartContext<Real>&, const R
 template <class Real>
 SSC_HD inline void adj_stiffness_field_cell(int i, const PartContext<Real>&, const Real* youngs_modulus,
                                             const Real* region_youngs, const Real* stiffness_gradient,
-                                            const int* cell_region, const Real* cell_offset, const int* region_count,
-                                            const Real* cell_youngs_bar, double* youngs_bar_share,
-                                            double* region_bar_share, double* gradient_bar_share) {
-  const int r = region_youngs ? cell_region[i] : -1;
-  const Real base = r >= 0 ? region_youngs[r] : youngs_modulus[0];
+                                            const Real* cell_region_share, const int* region_count,
+                                            const Real* cell_offset, const Real* cell_youngs_bar,
+                                            double* youngs_bar_share, double* region_bar_share,
+                                            double* gradient_bar_share) {
   const Real factor = stiffness_factor(stiffness_gradient, cell_offset, i);
   const Real E_bar = cell_youngs_bar[i];
-  youngs_bar_share[i] = r >= 0 ? 0.0 : double(E_bar * factor);
-  if (region_youngs)
-    for (int k = 0; k < region_count[0]; ++k) region_bar_share[region_count[0] * i + k] = k == r ? double(E_bar * factor) : 0.0;
+  Real rest = Real(1);
+  if (region_youngs) {
+    const int R = region_count[0];
+    for (int k = 0; k < R; ++k) {
+      rest -= cell_region_share[R * i + k];
+      region_bar_share[R * i + k] = double(E_bar * factor * cell_region_share[R * i + k]);
+    }
+  }
+  youngs_bar_share[i] = double(E_bar * factor * rest);
   if (stiffness_gradient) {
     const Vec3<Real> o = load3(cell_offset, i);
-    const Real s = E_bar * base * factor;
+    const Real s = E_bar * mixed_youngs(youngs_modulus, region_youngs, cell_region_share, region_count, i) * factor;
     for (int k = 0; k < 3; ++k) gradient_bar_share[3 * i + k] = double(s * o[k]);
   }
 }
@@ -61,11 +83,11 @@ inline OpSpec stiffness_field_spec() {
                {"regionbar", Domain::Cell, 0, "region_youngs"},
                {"gradientbar", Domain::Cell, 3, ""}};
   s.forward = {part("stiffness_field", Extent::Cell, SSC_PART(stiffness_field_cell),
-                    {"youngs_modulus", "region_youngs", "stiffness_gradient", "#cell_region", "#cell_offset",
-                     "cell_youngs"})};
+                    {"youngs_modulus", "region_youngs", "stiffness_gradient", "#cell_region_share",
+                     "#region_count", "#cell_offset", "cell_youngs"})};
   s.adjoint = {part("stiffness_field", Extent::Cell, SSC_ADJOINT_PART(adj_stiffness_field_cell),
-                    {"youngs_modulus", "region_youngs", "stiffness_gradient", "#cell_region", "#cell_offset",
-                     "#region_count", "d_cell_youngs", "$red", "$regionbar", "$gradientbar"}),
+                    {"youngs_modulus", "region_youngs", "stiffness_gradient", "#cell_region_share",
+                     "#region_count", "#cell_offset", "d_cell_youngs", "$red", "$regionbar", "$gradientbar"}),
                reduction("stiffness_field_reduce", {"$red"}, {"d_youngs_modulus"}),
                when_bound(reduction("stiffness_field_region_reduce", {"$regionbar"}, {"d_region_youngs"}),
                           "region_youngs"),

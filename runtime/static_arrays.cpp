@@ -12,7 +12,7 @@ std::vector<NamedStaticArray> named_static_arrays(const StaticArrays& g) {
   reals("cell_offset", g.cell_offset);
   reals("cell_surface_weights", g.cell_surface_weights);
   reals("cell_rest_normal", g.cell_rest_normal);
-  ints("cell_region", g.cell_region);
+  reals("cell_region_share", g.cell_region_share);
   ints("region_count", g.region_count);
   reals("node_volume", g.node_volume);
   reals("node_rest", g.node_rest);

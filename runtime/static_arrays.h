@@ -27,10 +27,10 @@ struct StaticArrays {
   std::vector<double> cell_surface_weights;
   std::vector<double> cell_rest_normal;
   // The heterogeneous body (ops/stiffness_field.h): each cell's rest centroid minus the body's
-  // rest centre of mass (3 per cell, m), its material region (-1: none) and the region count
-  // (one entry).
+  // rest centre of mass (3 per cell, m), the fraction of its inside part in each material region
+  // (region_count per cell; the rest takes the body's modulus) and the region count (one entry).
   std::vector<double> cell_offset;
-  std::vector<int> cell_region;
+  std::vector<double> cell_region_share;
   std::vector<int> region_count{0};
 
   std::vector<double> node_rest;            // 3 per active node, world position

@@ -52,8 +52,19 @@ std::vector<Eigen::Vector3d> static_displacements(const json& config, const std:
   Simulation sim(scene, grid);
   sim.step();
   if (regions) {
-    std::vector<int> count(scene.material.regions.size() + 1, 0);
-    for (int r : grid.cell_region) ++count[size_t(r + 1)];
+    // Cells wholly in no region, wholly in each region, and split between regions.
+    const size_t R = scene.material.regions.size();
+    std::vector<int> count(R + 2, 0);
+    for (int e = 0; e < grid.cell_count; ++e) {
+      double rest = 1;
+      int whole = -1;
+      for (size_t k = 0; k < R; ++k) {
+        const double s = grid.cell_region_share[R * size_t(e) + k];
+        rest -= s;
+        if (s == 1) whole = int(k);
+      }
+      ++count[rest == 1 ? 0 : whole >= 0 ? size_t(whole) + 1 : R + 1];
+    }
     *regions = std::to_string(grid.cell_count) + " cells:";
     for (size_t k = 0; k < count.size(); ++k) *regions += " " + std::to_string(count[k]);
   }
@@ -72,10 +83,42 @@ struct HangingBar {
     for (auto& [k, v] : material_extra.items()) j["material"][k] = v;
     std::string regions;
     const double drop = -static_displacements(j, {Eigen::Vector3d(0, 0, 0)}, &regions)[0].y();
-    std::printf("  hanging bar (%s per region, none first): end drop %.6e m\n", regions.c_str(), drop);
+    std::printf("  hanging bar (%s: wholly in no region, wholly in each, split): end drop %.6e m\n", regions.c_str(), drop);
     return drop;
   }
 };
+
+TEST(HeterogeneousStiffness, CellsSplitByARegionHoldItsVolume) {
+  // A 0.1 m cube on 25 mm cells, region x >= d for planes that cut the cells at several
+  // fractions: the cells' shares times their volumes add up to the region's volume, (0.05 - d)
+  // x 0.01 m^3, to within a slab of an eighth of a cell (4 samples per cell and axis). Taking
+  // each cell whole by its centroid is off by up to half a cell's slab.
+  const double h = 0.025;
+  for (double d : {0.3 * h, 0.55 * h, -0.8 * h, 0.0}) {
+    json j = static_scene({{"primitive", "box"}, {"half_extents", {0.05, 0.05, 0.05}}, {"position", {0, 0, 0}}}, h,
+                          1e5, 0.3, 100, json::array());
+    j["material"]["regions"] = {{{"normal", {1, 0, 0}}, {"offset", d}, {"youngs_modulus", 2e5}}};
+    const Scene scene = parse_scene(j, "split.json");
+    const SimGrid grid = build_body_grid(scene);
+    double in_region = 0, body = 0;
+    int split = 0;
+    for (int e = 0; e < grid.cell_count; ++e) {
+      double volume = 0;
+      for (int c = 0; c < 8; ++c) volume += grid.cell_volume_weights[8 * size_t(e) + c];
+      const double share = grid.cell_region_share[size_t(e)];
+      in_region += share * volume;
+      body += volume;
+      split += share > 0 && share < 1;
+    }
+    const double fraction = in_region / body, truth = (0.05 - d) / 0.1;
+    std::printf("region x >= %+.4f m: %.4f of the body (truth %.4f), %d cells split\n", d, fraction, truth, split);
+    EXPECT_NEAR(fraction, truth, h / 8 / 0.1 + 1e-9) << d;
+    for (double s : grid.cell_region_share) {
+      EXPECT_GE(s, 0.0);
+      EXPECT_LE(s, 1.0);
+    }
+  }
+}
 
 TEST(HeterogeneousStiffness, TwoMaterialHangingBarStretchesLikeSpringsInSeries) {
   const HangingBar bar;

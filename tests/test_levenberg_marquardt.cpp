@@ -145,6 +145,44 @@ TEST(LevenbergMarquardt, FailedEvaluations) {
   EXPECT_NEAR(later.best_point()[0], 0.5, 1e-6);
 }
 
+TEST(LevenbergMarquardt, StopsOnceTheStepLeftIsATenthOfAStandardError) {
+  // 400 noisy points of a line through the origin, slope z0, and one residual z1^2 whose
+  // Gauss-Newton steps only halve z1: the cost falls by ever smaller amounts, each far below
+  // what the noise lets the data tell. The statistical tolerance (0.01 / (m - n)) stops it
+  // sooner than the 1e-7 alone, with z0 within a tenth of its standard error of the least-squares
+  // slope (the closed form sum x y / sum x^2).
+  const int m = 400;
+  Vec x(m), y(m);
+  unsigned state = 12345;
+  for (int i = 0; i < m; ++i) {
+    state = state * 1103515245u + 12345u;
+    x[i] = 0.01 * (i + 1);
+    y[i] = 2 * x[i] + (double((state >> 8) % 2001) / 1000 - 1);  // noise in [-1, 1]
+  }
+  const Residuals f = [&](const Vec& z) {
+    Vec r(m + 1);
+    r.head(m) = z[0] * x - y;
+    r[m] = z[1] * z[1];
+    return r;
+  };
+  const double slope = x.dot(y) / x.squaredNorm();
+  const double sigma = std::sqrt((slope * x - y).squaredNorm() / (m - 1));
+  const double standard_error = sigma / x.norm();
+  OptimizerOptions strict, statistical;
+  strict.lm_standard_errors = 0;
+  LevenbergMarquardt a(vec({0.0, 1.0}), strict, 1e-7), b(vec({0.0, 1.0}), statistical, 1e-7);
+  drive(a, f);
+  drive(b, f);
+  std::printf("1e-7 alone: %d iterations, z = (%.6f, %.4f); statistical: %d iterations, z = (%.6f, %.4f); "
+              "least squares %.6f, standard error %.4f\n",
+              a.iterations(), a.best_point()[0], a.best_point()[1], b.iterations(), b.best_point()[0],
+              b.best_point()[1], slope, standard_error);
+  EXPECT_TRUE(a.converged()) << a.stop_reason();
+  EXPECT_TRUE(b.converged()) << b.stop_reason();
+  EXPECT_LT(b.iterations(), a.iterations());
+  EXPECT_LT(std::abs(b.best_point()[0] - slope), 0.1 * standard_error);
+}
+
 TEST(LevenbergMarquardt, AnAxisPushedAgainstItsBoundIsHeldThere) {
   // x = 1.5 sigmoid(z0) (a plausible range [0, 1.5]) wants 2, beyond the bound; y = z1 wants
   // 0.3, coupled to x as E is to a drag coefficient. With the axis marked bounded the fit holds x

@@ -153,7 +153,7 @@ void build_node_cell_incidence(SimGrid& g) {
       g.cell_offset[3 * e + k] = x[k] - g.rest_center_of_mass[k];
     }
   }
-  g.cell_region.assign(g.cell_count, -1);
+  g.cell_region_share.clear();
   g.region_count = {0};
 }
 

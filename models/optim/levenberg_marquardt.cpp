@@ -33,6 +33,12 @@ int LevenbergMarquardt::held_at_bound() const {
   return n;
 }
 
+double LevenbergMarquardt::cost_tolerance() const {
+  const double dof = double(r_.size() - z_.size());
+  const double s = o_.lm_standard_errors;
+  return dof > 0 ? std::max(o_.relative_tolerance, s * s / dof) : o_.relative_tolerance;
+}
+
 double LevenbergMarquardt::projected_gradient_norm() const {
   double sum = 0;
   for (Eigen::Index j = 0; j < g_.size(); ++j)
@@ -76,7 +82,7 @@ void LevenbergMarquardt::tell(const std::vector<ResidualVector>& values, const s
     nu_ = 2;
     if (projected_gradient_norm() <= o_.gradient_tolerance)
       reason_ = "converged: gradient";
-    else if (before - cost <= o_.relative_tolerance * before && predicted <= o_.relative_tolerance * before)
+    else if (before - cost <= cost_tolerance() * before && predicted <= cost_tolerance() * before)
       reason_ = "converged: relative cost change < tol";
     else if (iterations_ >= o_.max_iterations)
       reason_ = "iteration limit";

@@ -17,7 +17,8 @@
 // Stop reasons (stop_reason(); converged() for the first three):
 //   "converged: gradient"                      ||J'r|| <= gradient_tolerance (also at the start)
 //   "converged: relative cost change < tol"    an accepted step's actual and predicted decrease
-//                                              both <= relative_tolerance x J
+//                                              both <= tol x J, tol the larger of
+//                                              relative_tolerance and s^2 / (m - n) (below)
 //   "converged: step < tol"                    a proposed step ||dz|| <= step_tolerance (||z|| + step_tolerance)
 //   "iteration limit"                          max_iterations accepted steps
 //   "failed: simulation"                       the start point's evaluation failed (failure())
@@ -25,6 +26,15 @@
 //   "failed: non-finite step"                  the damped system had no finite solution
 //   "failed: no decrease after 30 damping increases"
 // A failed trial or probe (a simulation that exploded at a long step) counts as a rejected step.
+//
+// The statistical tolerance: with m residual entries, n parameters and the residuals' variance
+// estimated as 2 J / (m - n), moving the parameters by s standard errors changes J by about
+// s^2 J / (m - n). A step that is predicted to lower J by less than that (s = lm_standard_errors,
+// 0.1) moves them by less than a tenth of their uncertainty, so further iterations change
+// nothing the data can tell. Residuals that are correlated (model error) make the true
+// uncertainty larger, so this errs on the strict side. It is Bates and Watts's relative offset
+// criterion in the form of a cost change; on ssc's fits it stops the iterations that went on
+// lowering J by 1e-6 of itself until the iteration limit.
 //
 // Bounds (a projected step): an axis marked bounded runs its parameter through a sigmoid, so the
 // bound itself lies at z = +-infinity and a fit that wants a value beyond it would creep there
@@ -82,6 +92,8 @@ class LevenbergMarquardt {
   // Whether axis j is held at its bound at the current point (see the header comment).
   bool held(Eigen::Index j) const;
   double projected_gradient_norm() const;
+  // The relative cost change under which an accepted step counts as converged.
+  double cost_tolerance() const;
 
   OptimizerOptions o_;
   double h_;

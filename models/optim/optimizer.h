@@ -24,6 +24,9 @@ struct OptimizerOptions {
   double relative_tolerance = 1e-7;    // on |J_k - J_k-1| / |J_k|, over 3 consecutive iterations (lm: one)
   double step_tolerance = 1e-8;        // lm: on ||dz|| / (||z|| + step_tolerance)
   double lm_max_step = 1.0;            // lm: largest |dz_i| of one step, in internal units
+  // lm: the cost change test also passes once the step left would move the parameters by less
+  // than this many standard errors (see levenberg_marquardt.h); 0 turns that off.
+  double lm_standard_errors = 0.1;
   double rprop_initial_step = 0.05;    // in internal units (log space: 5 %)
   double rprop_min_step = 1e-8, rprop_max_step = 1.0;
   double gd_initial_step = 0.05;       // length of the first step in internal units

@@ -10,6 +10,7 @@
 #include "runtime/errors.h"
 #include "models/io/run_record.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -85,21 +86,55 @@ static double closed_mesh_volume(const TriangleMesh& mesh, double scale, int* bo
 
 void assign_material_regions(const Scene& scene, SimGrid& grid) {
   const std::vector<MaterialRegion>& regions = scene.material.regions;
-  grid.region_count = {int(regions.size())};
-  std::vector<int> cells(regions.size(), 0);
+  const int R = int(regions.size());
+  grid.region_count = {R};
+  grid.cell_region_share.assign(size_t(R) * size_t(grid.cell_count), 0.0);
+  if (R == 0) return;
+  // The region of a point: the last that contains it, -1 for none.
+  auto region_of = [&](const Eigen::Vector3d& x) {
+    int r = -1;
+    for (int k = 0; k < R; ++k)
+      if (regions[size_t(k)].contains(x)) r = k;
+    return r;
+  };
+  const SdfGrid& sdf = grid.sdf;
+  const long nx = sdf.size.x(), nxy = nx * sdf.size.y();
+  std::vector<double> share(size_t(R) + 1);
+  std::vector<double> held(size_t(R), 0.0);
   for (int e = 0; e < grid.cell_count; ++e) {
-    const Eigen::Vector3d x(grid.cell_center[3 * e], grid.cell_center[3 * e + 1], grid.cell_center[3 * e + 2]);
-    grid.cell_region[e] = -1;
-    for (size_t r = 0; r < regions.size(); ++r)
-      if (regions[r].contains(x)) grid.cell_region[e] = int(r);
-    if (grid.cell_region[e] >= 0) ++cells[size_t(grid.cell_region[e])];
+    const long o = grid.cell_origin[e];
+    const Eigen::Vector3d corner0 = sdf.node_position(o);
+    double phi[8];
+    for (int c = 0; c < 8; ++c) phi[c] = sdf.phi[size_t(o + (c & 1) + ((c >> 1) & 1) * nx + ((c >> 2) & 1) * nxy)];
+    std::fill(share.begin(), share.end(), 0.0);
+    int inside = 0;
+    for (int a = 0; a < kRegionSamples; ++a)
+      for (int b = 0; b < kRegionSamples; ++b)
+        for (int d = 0; d < kRegionSamples; ++d) {
+          const Eigen::Vector3d t = (Eigen::Vector3d(a, b, d) + Eigen::Vector3d::Constant(0.5)) / kRegionSamples;
+          double value = 0;
+          for (int c = 0; c < 8; ++c)
+            value += phi[c] * ((c & 1) ? t.x() : 1 - t.x()) * (((c >> 1) & 1) ? t.y() : 1 - t.y()) *
+                     (((c >> 2) & 1) ? t.z() : 1 - t.z());
+          if (value > 0) continue;
+          ++inside;
+          share[size_t(region_of(corner0 + sdf.cell_size * t) + 1)] += 1;
+        }
+    if (inside == 0) {  // a sliver of a cut cell between the samples: its centroid decides
+      const Eigen::Vector3d x(grid.cell_center[3 * e], grid.cell_center[3 * e + 1], grid.cell_center[3 * e + 2]);
+      share[size_t(region_of(x) + 1)] = inside = 1;
+    }
+    for (int k = 0; k < R; ++k) {
+      grid.cell_region_share[size_t(R) * e + k] = share[size_t(k) + 1] / inside;
+      held[size_t(k)] += share[size_t(k) + 1] / inside;
+    }
   }
-  for (size_t r = 0; r < regions.size(); ++r)
-    if (cells[r] == 0)
-      warn("empty_region", fmt::format("{}: material.regions[{}] holds no cell of the body (a cell belongs to the region "
-                                       "that contains its rest centroid, later regions first); its youngs_modulus has "
-                                       "no effect",
-                                       scene.file, r));
+  for (int k = 0; k < R; ++k)
+    if (held[size_t(k)] == 0)
+      warn("empty_region", fmt::format("{}: material.regions[{}] holds no part of the body's cells (a cell's share "
+                                       "of a region is the fraction of its inside part there, later regions first); "
+                                       "its youngs_modulus has no effect",
+                                       scene.file, k));
 }
 
 // A mesh exported in millimetres reads as a body of tens of metres or more: said before the

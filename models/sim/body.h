@@ -18,8 +18,10 @@ constexpr double kMillimetreMeshExtent = 10.0;
 
 SdfGrid build_rest_sdf(const Scene& scene);
 SimGrid build_body_grid(const Scene& scene);
-// Each cell's material region (StaticArrays::cell_region): the last region of the scene that
-// contains the cell's rest centroid; warns about regions that hold no cell.
+// Each cell's shares of the material regions (StaticArrays::cell_region_share): the fraction of
+// kRegionSamples^3 points spread over the cell, inside the body by the rest SDF, whose last
+// containing region is each one; warns about regions that hold no part of any cell.
+constexpr int kRegionSamples = 4;
 void assign_material_regions(const Scene& scene, SimGrid& grid);
 double primitive_volume(const Primitive& p);
 

@@ -432,8 +432,8 @@ std::vector<double> Simulation::cell_youngs(int b) const {
   std::vector<double> E(grid_.cell_count);
   for (int c = 0; c < grid_.cell_count; ++c)
     ops::stiffness_field_cell(c, cx, &p.youngs_modulus, graph_.region_youngs >= 0 ? p.region_youngs.data() : nullptr,
-                              graph_.stiffness_gradient >= 0 ? gradient : nullptr, grid_.cell_region.data(),
-                              grid_.cell_offset.data(), E.data());
+                              graph_.stiffness_gradient >= 0 ? gradient : nullptr, grid_.cell_region_share.data(),
+                              grid_.region_count.data(), grid_.cell_offset.data(), E.data());
   return E;
 }
 

@@ -35,8 +35,16 @@ if [ "${1:-}" = "--test-data" ]; then
         mkdir -p "$out/$c"
         cp -r "$tmp/$c/frames" "$tmp/$c/scene.json" "$out/$c/"
     done
+    # the two-material cube, whole (0.35 s): scene, surface frames and their render with 1 mm noise
+    # (tests/test_calculix_two_materials.cpp)
+    python3 "$here/drops.py" "$tmp" --cases two_materials --elements 3
+    rm -rf "$out/two_materials"
+    mkdir -p "$out/two_materials"
+    cp -r "$tmp/two_materials/frames" "$tmp/two_materials/scene.json" "$tmp/two_materials/ccx_run.json" "$out/two_materials/"
+    "$ssc" render "$out/two_materials/frames" --cameras "$out/two_materials/scene.json" --fps 60 --noise 0.001 --seed 7 \
+        --out "$out/two_materials/obs"
     rm -rf "$tmp"
-    echo "drops.sh: wrote $out/clean, $out/friction, $out/friction_low"
+    echo "drops.sh: wrote $out/clean, $out/friction, $out/friction_low, $out/two_materials"
     exit 0
 fi
 
