@@ -75,12 +75,20 @@ json synthetic_report() {
       {"candidates",
        {{{"name", "friction"}, {"extra_parameters", {{"ground.friction", 0.31}}}, {"heldout_before", 1.2e-4}, {"heldout_after", 3.1e-5},
          {"gain", 0.71}, {"gain_low", 0.55}, {"gain_high", 0.83}, {"placebo_gain", 0.05}, {"score", 3.2}, {"passes", true},
-         {"base_before", {{"youngs_modulus", 117000}}}, {"base_after", {{"youngs_modulus", 52000}}}, {"warnings", json::array()}},
+         {"base_before", {{"youngs_modulus", 117000}}}, {"base_after", {{"youngs_modulus", 52000}}}, {"warnings", json::array()},
+         {"convergence",
+          {{"per_start",
+            {{{"stop_reason", "converged: relative cost change < tol"}, {"iterations", 3}, {"costs", {4e-4, 1e-4, 3.2e-5, 3.1e-5}}},
+             {{"stop_reason", "iteration limit"}, {"iterations", 4}, {"costs", {6e-4, 3e-4, 2e-4, 1.5e-4, 1.2e-4}}}}}}}},
         {{"name", "air_drag"}, {"extra_parameters", {{"air_drag", 0.8}}}, {"heldout_before", 1.2e-4}, {"heldout_after", 1.1e-4},
          {"gain", 0.08}, {"gain_low", -0.04}, {"gain_high", 0.2}, {"placebo_gain", 0.06}, {"score", 0.3}, {"passes", false},
          {"base_before", {{"youngs_modulus", 117000}}}, {"base_after", {{"youngs_modulus", 98000}}},
          {"warnings", {"the 90 % interval includes 0"}}}}},
       {"confounded", json::array({json::array({"air_drag", "mass_damping"})})},
+      {"base_convergence",
+       {{"per_start",
+         {{{"stop_reason", "converged: gradient"}, {"iterations", 2}, {"costs", {2e-4, 1.3e-4, 1.2e-4}}},
+          {{"stop_reason", "converged: gradient"}, {"iterations", 5}, {"costs", {9e-4, 5e-4, 2e-4, 1.3e-4, 1.21e-4, 1.2e-4}}}}}}},
       {"discretization_controls",
        {{{"name", "finer_grid"}, {"fitted", true}, {"what", "a grid of half the cell size, grid.cell_size 0.025 m"},
          {"parameters", {{"youngs_modulus", 51000}}}, {"gain", 0.21}, {"gain_low", 0.15}, {"gain_high", 0.27}},
@@ -98,9 +106,10 @@ json synthetic_report() {
   };
 }
 
-// Inline SVGs the synthetic report must have: the gain chart, the residual over time, one
-// colour bar and 2 x (before, after) images, one colour bar and (before, after) rest shapes.
-constexpr size_t kExpectedSvgs = 1 + 1 + 1 + 4 + 1 + 2;
+// Inline SVGs the synthetic report must have: the gain chart, the fits' costs (the base and the
+// cause in one), the residual over time, one colour bar and 2 x (before, after) images, one
+// colour bar and (before, after) rest shapes.
+constexpr size_t kExpectedSvgs = 1 + 1 + 1 + 1 + 4 + 1 + 2;
 
 size_t count_of(const std::string& text, const std::string& needle) {
   size_t n = 0;
@@ -137,7 +146,7 @@ TEST(ReportHtml, RendersEverySectionAndFigureOfASyntheticReport) {
     EXPECT_NE(html.find(text), std::string::npos) << text;
   // The sections in their order.
   size_t previous = 0;
-  for (const char* heading : {"<h2>Candidates", "<h2>Residual over time", "<h2>Residual images", "<h2>Residual on the rest shape", "<h2>Parameters"}) {
+  for (const char* heading : {"<h2>Candidates", "<h2>Fits", "<h2>Residual over time", "<h2>Residual images", "<h2>Residual on the rest shape", "<h2>Parameters"}) {
     const size_t at = html.find(heading);
     ASSERT_NE(at, std::string::npos) << heading;
     EXPECT_GT(at, previous) << heading;
@@ -151,6 +160,17 @@ TEST(ReportHtml, RendersEverySectionAndFigureOfASyntheticReport) {
   EXPECT_NE(image_html.find("fill=\"#d0d0d0\""), std::string::npos);
   // The passing candidate's row is highlighted.
   EXPECT_EQ(count_of(html, "<tr class=\"pass\">"), 1u);
+  // The fits: the base's two starts converged, friction's one of two; air drag has no per-start
+  // record and no row. Friction's starts are drawn with the base's.
+  const size_t fits = html.find("<h2>Fits"), over_time = html.find("<h2>Residual over time");
+  const std::string fits_html = html.substr(fits, over_time - fits);
+  EXPECT_NE(fits_html.find("<tr><td>base</td><td class=\"num\">2 of 2</td><td class=\"num\">2\u20135</td>"),
+            std::string::npos)
+      << fits_html;
+  EXPECT_NE(fits_html.find("<tr class=\"unconverged\"><td>friction</td><td class=\"num\">1 of 2</td>"), std::string::npos);
+  EXPECT_NE(fits_html.find("1 \u00d7 iteration limit"), std::string::npos);
+  EXPECT_EQ(fits_html.find("air_drag"), std::string::npos);
+  EXPECT_NE(fits_html.find("the cause's starts (friction)"), std::string::npos);
 }
 
 // `ssc residuals` reports one model: no "after" column, in the images or on the rest shape.

@@ -326,6 +326,91 @@ std::string candidates_html(const json& data) {
   return html;
 }
 
+// ---- 2b. how the fits ended -------------------------------------------------------------------
+
+// One row per fit (the base, each candidate, each control) that lists its starts: how many
+// converged, their iterations, their stop reasons counted; and, for the base and the cause, the
+// held-in cost of every start over its iterations, relative to the fit's lowest (log scale), so
+// that a start still falling at the iteration limit shows.
+std::string fits_html(const json& data) {
+  struct Fit {
+    std::string name;
+    const json* convergence;
+  };
+  std::vector<Fit> fits;
+  if (has_items(member(member(data, "base_convergence"), "per_start")))
+    fits.push_back({"base", &member(data, "base_convergence")});
+  for (const char* list : {"candidates", "discretization_controls"}) {
+    const json& items = member(data, list);
+    if (items.is_array())
+      for (const json& c : items)
+        if (has_items(member(member(c, "convergence"), "per_start")))
+          fits.push_back({text_at(c, "name"), &member(c, "convergence")});
+  }
+  if (fits.empty()) return "";
+  std::string html =
+      "<table class=\"fits\">\n<tr><th>fit</th><th>starts converged</th><th>iterations</th><th>stop reasons</th></tr>\n";
+  std::vector<PlotPanel> panels;
+  const std::string cause = text_at(data, "cause");
+  for (const Fit& f : fits) {
+    const json& starts = member(*f.convergence, "per_start");
+    int converged = 0, fewest = -1, most = -1, n = 0;
+    std::vector<std::pair<std::string, int>> reasons;
+    for (const json& s : starts) {
+      const std::string reason = text_at(s, "stop_reason");
+      converged += reason.rfind("converged", 0) == 0;
+      const double it = number_at(s, "iterations");
+      if (std::isfinite(it)) {
+        fewest = fewest < 0 ? int(it) : std::min(fewest, int(it));
+        most = std::max(most, int(it));
+      }
+      auto r = std::find_if(reasons.begin(), reasons.end(), [&](const auto& p) { return p.first == reason; });
+      if (r == reasons.end())
+        reasons.push_back({reason, 1});
+      else
+        ++r->second;
+      ++n;
+    }
+    std::string reason_text;
+    for (const auto& [reason, count] : reasons)
+      reason_text += (reason_text.empty() ? "" : "<br>") +
+                     fmt::format("{} \u00d7 {}", count, escape_html(reason.empty() ? "?" : reason));
+    const std::string iterations = fewest < 0     ? std::string(kNoValueText)
+                                   : fewest == most ? std::to_string(fewest)
+                                                    : fmt::format("{}\u2013{}", fewest, most);
+    html += fmt::format("<tr{}><td>{}</td><td class=\"num\">{} of {}</td><td class=\"num\">{}</td><td>{}</td></tr>\n",
+                        converged < n ? " class=\"unconverged\"" : "", escape_html(f.name), converged, n, iterations,
+                        reason_text);
+    if (f.name != "base" && f.name != cause) continue;
+    double lowest = std::numeric_limits<double>::infinity();
+    for (const json& s : starts)
+      for (double c : numbers_at(s, "costs"))
+        if (std::isfinite(c) && c > 0) lowest = std::min(lowest, c);
+    if (!std::isfinite(lowest)) continue;
+    PlotPanel panel;
+    panel.title = f.name == "base" ? "the base model's starts" : "the cause's starts (" + f.name + ")";
+    panel.x_label = "iteration";
+    panel.y_label = "held-in cost / the fit's lowest";
+    panel.log_y = true;
+    int k = 0;
+    for (const json& s : starts) {
+      PlotSeries series;
+      series.color = plot_color(k++);
+      for (double c : numbers_at(s, "costs"))
+        if (std::isfinite(c) && c > 0) {
+          series.x.push_back(double(series.x.size()));
+          series.y.push_back(c / lowest);
+        }
+      series.markers = series.x.size() <= 40;
+      if (!series.x.empty()) panel.series.push_back(std::move(series));
+    }
+    panels.push_back(std::move(panel));
+  }
+  html += "</table>\n";
+  if (!panels.empty()) html += "<figure>\n" + svg_plot_string(panels, 900, 240) + "</figure>\n";
+  return html;
+}
+
 // ---- 3. residual over time -----------------------------------------------------------------
 
 std::string residual_over_time_html(const json& data) {
@@ -509,6 +594,7 @@ th, td { border: 1px solid #ddd; padding: 4px 8px; text-align: left; vertical-al
 th { background: #f3f3f3; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 tr.pass { background: #ebfbee; }
+tr.unconverged td:nth-child(2) { color: #c92a2a; }
 table.candidates { width: 100%; font-size: 12px; }
 table.candidates td { overflow-wrap: anywhere; }
 table.provenance { font-size: 12px; color: #444; }
@@ -537,6 +623,7 @@ std::string render_report_html(const nlohmann::json& data) {
       escape_html(title), kStyle);
   html += header_html(data, title);
   html += section("Candidates", candidates_html(data));
+  html += section("Fits", fits_html(data));
   html += section("Residual over time", residual_over_time_html(data));
   html += section("Residual images", residual_images_html(data));
   html += section("Residual on the rest shape", rest_shape_html(data));

@@ -59,6 +59,7 @@ nlohmann::json report_data(const Diagnosis& d, const nlohmann::json& dj, const s
   data["candidates"] = dj["candidates"];
   data["confounded"] = dj["confounded"];
   data["discretization_controls"] = dj["discretization_controls"];
+  data["base_convergence"] = dj["base"]["convergence"];
   nlohmann::json units = nlohmann::json::object(), base = dj["base"]["parameters"], winner = nlohmann::json::object();
   for (const auto& [name, value] : base.items()) units[name] = parameter_or_measurement_unit(name);
   for (const FittedModel& m : d.candidates)
