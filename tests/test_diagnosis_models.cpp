@@ -53,8 +53,10 @@ TEST(DiagnosisModels, TheFinerStepHalvesTheTimeStepOverTheSameDuration) {
   EXPECT_EQ(spec.overrides.size(), 3u);
 
   scene.time.theta = 0.5;
-  scene.solver.implicit_contact = true;
+  scene.solver.implicit_contact = true;  // iterates only against a plane
   scene.solver.nonlinear_iterations = 4;
+  EXPECT_EQ(finer_step_spec(scene).overrides.size(), 2u);
+  scene.planes.emplace_back();
   const ModelSpec iterating = finer_step_spec(scene);
   EXPECT_TRUE(has(iterating.overrides, "solver.nonlinear_iterations=8"));
   for (const std::string& o : iterating.overrides) EXPECT_EQ(o.find("time.theta"), std::string::npos) << o;

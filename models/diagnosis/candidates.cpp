@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "models/sim/parameters.h"
+#include "models/sim/timestep_graph.h"
 
 namespace ssc {
 namespace {
@@ -226,7 +227,7 @@ ModelSpec finer_step_spec(const Scene& scene) {
     spec.overrides.push_back(fmt::format("time.theta={}", theta));
     spec.note += fmt::format(", theta {:g}", theta);
   }
-  if (scene.solver.implicit_contact || scene.solver.updated_corotation || scene.material.neo_hookean) {
+  if (timestep_model(scene).iterates(int(scene.planes.size()))) {
     const int iterations = std::min(50, 2 * scene.solver.nonlinear_iterations);
     spec.overrides.push_back(fmt::format("solver.nonlinear_iterations={}", iterations));
     spec.note += fmt::format(", {} nonlinear iterations", iterations);

@@ -80,7 +80,7 @@ class LevenbergMarquardt {
   const Eigen::VectorXd& best_point() const { return z_; }
   double best_cost() const { return cost_; }
   double gradient_norm() const { return g_.norm(); }
-  // The axes held at a bound in the last step proposed.
+  // How many axes are held at their bound at the current point (see the header comment).
   int held_at_bound() const;
   bool accepted() const { return accepted_; }
   const Eigen::MatrixXd& jacobian() const { return J_; }

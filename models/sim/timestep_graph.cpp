@@ -114,7 +114,7 @@ TimestepGraph build_timestep_graph(int plane_count, bool extension, const Timest
   const std::vector<OpArg> newmark_scalars = {P("dt", t.dt), P("theta", t.theta), P("mass_damping", t.mass_damping),
                                               P("stiffness_damping", t.stiffness_damping)};
   t.neo_hookean = model.neo_hookean;
-  const bool iterating = implicit_contact || model.updated_corotation || model.neo_hookean;
+  const bool iterating = model.iterates(plane_count);
   const int iterations = iterating ? std::max(1, model.nonlinear_iterations) : 1;
   int rotation = t.rotation, iterate = -1;
   const int corner_force = g.find_tensor("corotation_force");

@@ -38,6 +38,10 @@ struct TimestepModel {
   int nonlinear_iterations = 4;
 
   bool heterogeneous() const { return region_count > 0 || stiffness_gradient; }
+  // Whether the step repeats its solve nonlinear_iterations times (implicit contact needs a plane).
+  bool iterates(int plane_count) const {
+    return (implicit_contact && plane_count > 0) || updated_corotation || neo_hookean;
+  }
 };
 // The extensions a scene models.
 TimestepModel timestep_model(const Scene& scene);
