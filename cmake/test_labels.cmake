@@ -31,7 +31,7 @@ set(SSC_TESTS_physics
   PhysicsBatch PhysicsBounce PhysicsCantilever PhysicsFreeFall PhysicsGrid PhysicsRigidMotion StiffContact
   EnergyAudit MatchCheck RunChecks BatchEvaluation
   ReconstructionEndToEnd ReconstructionFailures ReconstructionLeastSquares
-  FrameTimes FrictionSlope CalculixFriction CalculixTwoMaterials GoodnessOfFit ParameterSlices PlaneProposals RestingStart TablePoints CalculixDrops PrepareSynthetic PrepareRealRecording
+  FrameTimes FrictionSlope CalculixFriction CalculixTwoMaterials CalculixInterfaceSearch GoodnessOfFit ParameterSlices PlaneProposals RestingStart TablePoints CalculixDrops PrepareSynthetic PrepareRealRecording
   GpuForward.ExplodingGradientFailsCleanlyOnTheCpu GpuKernels.RandomStateAndEveryAdjointGroupOnTheCpu)
 
 set(SSC_TESTS_cli
@@ -47,6 +47,7 @@ set(SSC_TESTS_slow
   NeoHookean.LargeDeflectionCantileverAgainstCalculix CalculixDropsFit.DiagnoseFitsTheDiscretizationControlOnHalfTheCellSize
   PrepareCli.PrepareThenReconstructRecoversYoungsModulus PrepareCli.CalculixDropPreparedThenFittedSlow
   MpiRanks.ReconstructOnTwoRanksGivesTheOneProcessResult
+  CalculixInterfaceSearch.FromTheStiffnessGradientFindsCalculixsInterface
   NvrtcCompile.AllExampleKernelsDoubleAndFloat)
 
 set(SSC_TESTS_gpu

@@ -189,8 +189,10 @@ InterfaceGuess interface_proposal(const FittedModel& gradient_fit, const Problem
   guess.offset = guess.normal.dot(base.grid.rest_center_of_mass);
   const auto e = v.find("youngs_modulus");
   const double modulus = e != v.end() ? e->second : base.scene.material.youngs_modulus;
-  // The stiff side's mean modulus under the gradient, about E exp(|g| L / 4).
+  // Each side's mean modulus under the gradient, about E exp(+-|g| L / 4): the soft side's is
+  // the body's, not the homogeneous base's (which a stiff part can drive far too stiff).
   guess.modulus = modulus * std::exp(g.norm() * extent / 4);
+  guess.body_modulus = modulus * std::exp(-g.norm() * extent / 4);
   return guess;
 }
 

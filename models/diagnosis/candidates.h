@@ -39,7 +39,8 @@ std::vector<ModelSpec> plane_proposals(const FittedModel& base, int heldin, int 
 // changes the modulus by less than 10 % across the body. interface_search.h refines it.
 struct InterfaceGuess {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // unit; n . x = offset is the interface
-  double offset = 0, modulus = 0;
+  double offset = 0, modulus = 0;  // modulus: the side the normal points to
+  double body_modulus = 0;          // the other side's; 0: the base fit's
   bool found() const { return normal.squaredNorm() > 0; }
 };
 InterfaceGuess interface_proposal(const FittedModel& gradient_fit, const Problem& base, double extent);

@@ -136,6 +136,7 @@ FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const Diagnosis
                     std::vector<std::map<std::string, double>>& base_starts, std::string* skipped) {
   if (row.fit == ExtensionRow::Fit::Measurement) return fit_measurement(row, d.base, c, base_starts);
   std::vector<ModelSpec> specs;
+  std::vector<std::map<std::string, double>> starts = base_starts;
   if (row.fit == ExtensionRow::Fit::ModelSwitch) {
     specs.push_back(candidate_spec(row, scene, c.extent));
   } else if (row.fit == ExtensionRow::Fit::ProposedPlane) {
@@ -151,11 +152,18 @@ FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const Diagnosis
     else if (const InterfaceGuess guess = interface_proposal(gradient->second, d.base.problem, c.extent); !guess.found())
       *skipped = "the fitted stiffness gradient changes the modulus by less than 10 % across the body: no interface "
                  "to propose";
-    else
-      specs.push_back(interface_spec(search_interface(d.base, guess, c), guess, d.base.problem.grid.rest_center_of_mass));
+    else {
+      const InterfaceSearch search = search_interface(d.base, guess, c);
+      specs.push_back(interface_spec(search, guess, d.base.problem.grid.rest_center_of_mass));
+      // One start more: the base's fit with both sides' moduli where the search found them.
+      std::map<std::string, double> found = values_by_name(d.base);
+      if (found.count("youngs_modulus") && search.best.body_modulus > 0) found["youngs_modulus"] = search.best.body_modulus;
+      found[specs.back().extra[0]] = search.best.modulus;
+      starts.insert(starts.begin(), found);
+    }
   }
   if (!skipped->empty()) return FittedModel{};
-  std::vector<FittedModel> fits = fit_together(specs, c, base_starts);
+  std::vector<FittedModel> fits = fit_together(specs, c, starts);
   size_t best = 0;
   for (size_t i = 1; i < fits.size(); ++i)
     if (fits[best].failed || (!fits[i].failed && fits[i].heldin_cost < fits[best].heldin_cost)) best = i;

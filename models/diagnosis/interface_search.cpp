@@ -38,8 +38,8 @@ bool splits_body(const SimGrid& grid, const InterfaceGuess& g) {
   return inside > 0 && inside < grid.cell_count;
 }
 
-// The held-in cost of one geometry at the best of o.moduli second moduli (one batch); the
-// best modulus goes to g.modulus. +infinity for a geometry that is no interface (one side
+// The held-in cost of one geometry at the best of o.moduli second moduli (one batch), the body
+// at g.body_modulus (the base fit's where 0); the best second modulus goes to g.modulus. +infinity for a geometry that is no interface (one side
 // empty) or whose simulation fails.
 double score(Problem& p, const FittedModel& base, InterfaceGuess& g, const DiagnosisContext& c,
              const InterfaceSearchOptions& o, const std::string& device) {
@@ -52,10 +52,13 @@ double score(Problem& p, const FittedModel& base, InterfaceGuess& g, const Diagn
     const int n = std::max(1, o.moduli);
     Simulation sim(p.scene, p.grid, n, true);
     place_on(sim, device);
-    std::vector<double> moduli;
+    std::vector<double> moduli, bodies;
     for (int i = 0; i < n; ++i) {
-      moduli.push_back(g.modulus * std::pow(3.0, n == 1 ? 0.0 : -1 + 2.0 * i / (n - 1)));
+      const double f = std::pow(3.0, n == 1 ? 0.0 : -1 + 2.0 * i / (n - 1));
+      moduli.push_back(g.modulus * f);
+      bodies.push_back(g.body_modulus * f);
       PhysicalParameters q = with_values(p.scene, base.names, base.values);
+      if (g.body_modulus > 0) set_parameter(q, "youngs_modulus", bodies.back());
       set_parameter(q, kRegionModulus, moduli.back());
       sim.set_parameters(i, q);
     }
@@ -63,10 +66,10 @@ double score(Problem& p, const FittedModel& base, InterfaceGuess& g, const Diagn
     go.gradient = false;
     const std::vector<CostGradient> r = evaluate_cost_gradient(sim, SurfaceConstraintCost(p.grid, p.phi_max), p.frames, go);
     double best = std::numeric_limits<double>::infinity();
-    double at = g.modulus;
-    for (int i = 0; i < n; ++i)
-      if (std::isfinite(r[size_t(i)].cost) && r[size_t(i)].cost < best) best = r[size_t(i)].cost, at = moduli[size_t(i)];
-    g.modulus = at;
+    size_t at = size_t(-1);
+    for (size_t i = 0; i < size_t(n); ++i)
+      if (std::isfinite(r[i].cost) && r[i].cost < best) best = r[i].cost, at = i;
+    if (at != size_t(-1)) g.modulus = moduli[at], g.body_modulus = bodies[at];
     return best;
   } catch (const std::exception&) {
     return std::numeric_limits<double>::infinity();
@@ -103,6 +106,15 @@ InterfaceSearch search_interface(const FittedModel& base, const InterfaceGuess& 
         g.offset += sign * shift;
         around.push_back(g);
       }
+      // With the body's modulus given, score() scales both sides together; the ratio of the
+      // two sides moves here, as geometry does: at CalculiX's interface the held-in cost at the
+      // gradient's ratio is 4 times that at the true one.
+      if (s.best.body_modulus > 0)
+        for (double sign : {-1.0, 1.0}) {
+          InterfaceGuess g = s.best;
+          g.modulus *= std::pow(o.ratio_step, sign / std::pow(2.0, round));
+          around.push_back(g);
+        }
       InterfaceGuess next = s.best;
       double next_cost = s.heldin_cost;
       std::vector<double> costs(around.size());  // side by side on GPUs, each on its copy of the problem

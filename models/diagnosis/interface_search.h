@@ -7,7 +7,8 @@
 // over the normal (tilted towards four directions across it) and the offset (moved both ways),
 // with the steps halved each round; a geometry's score is the held-in cost at the best of a
 // few second moduli around the guess, all run as one batch of simulations, with the base
-// fit's parameters. The candidate's fit then takes the best geometry found.
+// fit's parameters but the body's modulus the guess's (the gradient fit's soft side: a
+// homogeneous base can be many times too stiff for a body with a stiff part). The candidate's fit then takes the best geometry found.
 #pragma once
 #include <string>
 
@@ -17,11 +18,13 @@
 namespace ssc {
 
 struct InterfaceSearchOptions {
-  int rounds = 2;
+  int rounds = 3;
   double tilt_deg = 15;         // the first round's tilt of the normal
   double shift_fraction = 1.0 / 8;  // the first round's offset step, of the body's extent
   int moves_per_round = 3;
-  int moduli = 4;               // second moduli per geometry: modulus times 3^t, t from -1 to 1
+  int moduli = 4;               // moduli per geometry: both sides' (the second's alone where the
+                                //   body's is not given) times 3^t, t from -1 to 1
+  double ratio_step = 2;        // the first round's factor on the second modulus alone
 };
 
 struct InterfaceSearch {

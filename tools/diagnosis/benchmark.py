@@ -277,7 +277,7 @@ def main():
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--starts", type=int, default=8)        # ssc diagnose's defaults
     ap.add_argument("--iterations", type=int, default=30)
-    ap.add_argument("--only", default="", help="comma-separated parts of case names (NAME$: that case alone)")
+    ap.add_argument("--only", default="", help="comma-separated parts of case names (NAME$: that case alone), run in this order")
     ap.add_argument("--json", default="")
     ap.add_argument("--timing", action="store_true", help="only the 360-step timing case")
     ap.add_argument("--calculix", default="", help="a tools/calculix/drops.sh output folder: diagnose its cases "
@@ -295,7 +295,10 @@ def main():
     todo = timing_cases() if a.timing else calculix_cases(a.calculix) if a.calculix else cases()
     def chosen(name, part):  # a part ending in $ names a case exactly
         return part and (name == part[:-1] if part.endswith("$") else part in name)
-    todo = [c for c in todo if not a.only or any(chosen(c["name"], part) for part in a.only.split(","))]
+    if a.only:  # the cases --only names, in the order it names them
+        parts = a.only.split(",")
+        rank = {c["name"]: min((i for i, p in enumerate(parts) if chosen(c["name"], p)), default=None) for c in todo}
+        todo = sorted((c for c in todo if rank[c["name"]] is not None), key=lambda c: rank[c["name"]])
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
         for x in pool.map(lambda c: run_case(c, a), todo):
             results.append(x)
