@@ -6,6 +6,7 @@
 # matrix. Usage: tools/diagnosis-benchmark.sh [BUILD_DIR] [DEVICE]
 #   STARTS, ITERATIONS (default 8, 30: ssc diagnose's), ONLY (comma-separated parts of case names), OUT (default build/diagnosis),
 #   CALCULIX=DIR: the independent set as well; TIMING=1: only the 360-step timing case (run it with STARTS=16 ITERATIONS=40)
+#   JOBS: diagnoses at once (default 1), GPUS: comma-separated GPU ids they share out (e.g. JOBS=4 GPUS=0,1)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}
@@ -14,7 +15,8 @@ out=${OUT:-$build/diagnosis}
 run() {  # $1: results file, then benchmark.py's own options
   local results=$1; shift
   python3 tools/diagnosis/benchmark.py --ssc "$build/bin/ssc" --work "$out" --device "$device" \
-    --starts "${STARTS:-8}" --iterations "${ITERATIONS:-30}" --only "${ONLY:-}" --json "$results" "$@"
+    --starts "${STARTS:-8}" --iterations "${ITERATIONS:-30}" --only "${ONLY:-}" --jobs "${JOBS:-1}" --gpus "${GPUS:-}" \
+    --json "$results" "$@"
 }
 run "$out/results-$device.json" ${TIMING:+--timing}
 sets=("$out/results-$device.json")

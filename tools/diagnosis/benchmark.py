@@ -3,7 +3,7 @@
 switched on (two strengths) or none, partly with another discretisation than the fit's; each
 diagnosed by `ssc diagnose` from a scene without the effect. Prints a line per case and writes
 the results as JSON and as the Markdown table of docs/diagnosis.md (--json PATH, PATH.md)."""
-import argparse, concurrent.futures, copy, json, os, shutil, subprocess, time
+import argparse, concurrent.futures, copy, json, os, queue, shutil, subprocess, time
 
 # Positions are off the grid planes by a few millimetres: a cube whose faces lie on grid planes
 # is, once it tumbles, rendered by `observe` where the cost does not find it (docs/diagnosis.md).
@@ -204,10 +204,16 @@ def run_case(c, a):
         measurement_edit(obs, c["edit"])
     t0 = time.time()
     log_path = os.path.join(d, "diagnose.log")  # written as it goes: its progress lines carry the elapsed time
-    with open(log_path, "w") as log:
-        r = subprocess.run([a.ssc, "diagnose", fit, "--observations", obs, "--out", os.path.join(d, "diag"),
-                            "--starts", str(a.starts), "--iterations", str(a.iterations), "--device", a.device] +
-                           a.diagnose_args.split(), stdout=log, stderr=subprocess.STDOUT, text=True)
+    gpu = a.free_gpus.get() if a.free_gpus else None
+    env = dict(os.environ, **({"CUDA_VISIBLE_DEVICES": gpu} if gpu is not None else {}), **a.thread_env)
+    try:
+        with open(log_path, "w") as log:
+            r = subprocess.run([a.ssc, "diagnose", fit, "--observations", obs, "--out", os.path.join(d, "diag"),
+                                "--starts", str(a.starts), "--iterations", str(a.iterations), "--device", a.device] +
+                               a.diagnose_args.split(), stdout=log, stderr=subprocess.STDOUT, text=True, env=env)
+    finally:
+        if gpu is not None:
+            a.free_gpus.put(gpu)
     wall = time.time() - t0
     if r.returncode:
         print(f"{c['name']}: diagnose failed: {open(log_path).read().strip()[-300:]}", flush=True)
@@ -282,7 +288,9 @@ def main():
     ap.add_argument("--timing", action="store_true", help="only the 360-step timing case")
     ap.add_argument("--calculix", default="", help="a tools/calculix/drops.sh output folder: diagnose its cases "
                     "(rendered here with 1 mm noise) instead of the ssc-made ones")
-    ap.add_argument("--jobs", type=int, default=1, help="diagnoses run at once (one GPU shares them)")
+    ap.add_argument("--jobs", type=int, default=1, help="diagnoses run at once (one GPU shares them; see --gpus)")
+    ap.add_argument("--gpus", default="", help="comma-separated GPU ids: each diagnosis runs on one of them "
+                    "(CUDA_VISIBLE_DEVICES), --jobs shared out evenly")
     ap.add_argument("--diagnose-args", default="", help="more arguments for ssc diagnose (e.g. '--gpus 1')")
     a = ap.parse_args()
     if a.confusion:
@@ -291,6 +299,19 @@ def main():
     if not a.ssc or not a.work:
         ap.error("--ssc and --work are required (unless --confusion)")
     os.makedirs(a.work, exist_ok=True)
+    a.free_gpus = None
+    if a.gpus:
+        a.free_gpus = queue.Queue()
+        ids = [g.strip() for g in a.gpus.split(",") if g.strip()]
+        for k in range(max(1, a.jobs)):
+            a.free_gpus.put(ids[k % len(ids)])
+    # Several diagnoses at once share the cores: six on one GPU at OpenMP's defaults were still in
+    # their first batch after 25 minutes; two a GPU with 4 threads each, waiting passively, ran
+    # 13 in 24 minutes on two (docs/benchmarks.md). The environment's own settings win.
+    a.thread_env = {}
+    if a.jobs > 1:
+        a.thread_env = {"OMP_NUM_THREADS": os.environ.get("OMP_NUM_THREADS", str(max(1, (os.cpu_count() or 2) // a.jobs))),
+                        "OMP_WAIT_POLICY": os.environ.get("OMP_WAIT_POLICY", "passive")}
     results = []
     todo = timing_cases() if a.timing else calculix_cases(a.calculix) if a.calculix else cases()
     def chosen(name, part):  # a part ending in $ names a case exactly
