@@ -38,9 +38,10 @@ bool splits_body(const SimGrid& grid, const InterfaceGuess& g) {
   return inside > 0 && inside < grid.cell_count;
 }
 
-// The held-in cost of one geometry at the best of o.moduli second moduli (one batch), the body
-// at g.body_modulus (the base fit's where 0); the best second modulus goes to g.modulus. +infinity for a geometry that is no interface (one side
-// empty) or whose simulation fails.
+// The held-in cost of one geometry at the best of o.moduli scales of its moduli (one batch):
+// both sides' where the body's is given, else the second's alone with the body at the base
+// fit's; the best go to g. +infinity for a geometry that is no interface (one side empty) or
+// whose simulation fails.
 double score(Problem& p, const FittedModel& base, InterfaceGuess& g, const DiagnosisContext& c,
              const InterfaceSearchOptions& o, const std::string& device) {
   if (!splits_body(p.grid, g)) return std::numeric_limits<double>::infinity();
