@@ -31,7 +31,9 @@
 // by less than their difference's interval are reported as confounded. A candidate that fits
 // the held-in and the held-out frames as well as the base (both gains' intervals contain 0)
 // while it moves a base parameter is reported as undecided: these data cannot tell the two
-// models apart, and the base parameter depends on which is right.
+// models apart, and the base parameter depends on which is right. A physical cause is refitted
+// on the grid control's finer grid from its fit; a parameter that moves by 10 % or more there
+// depends on the grid, and the user is told to refit on the finer grid.
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
@@ -39,6 +41,7 @@
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -65,6 +68,14 @@ struct Diagnosis {
     double gain = 0, gain_low = 0, gain_high = 0;
   };
   std::vector<Control> controls;
+  // The cause refitted on the finer_grid control's grid, from its fit: the grid control refits
+  // the base model only, and a cause's values can depend on the grid where the base's do not.
+  // Run where the cause is a physical extension and that control ran.
+  struct GridCheck {
+    FittedModel fit;  // failed with the reason where its fit failed
+    std::vector<std::tuple<std::string, double, double>> moved;  // by 10 % or more: (name, this grid, the finer)
+  };
+  std::optional<GridCheck> cause_on_finer_grid;
   std::string cause = "none";
   // Physical candidates that passed beside a measurement cause: fitted to the frames as
   // recorded, they are judged once the recording is corrected.

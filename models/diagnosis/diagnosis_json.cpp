@@ -100,6 +100,24 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
     controls.push_back(c);
   }
   j["discretization_controls"] = controls;
+  j["cause_on_finer_grid"] = nullptr;
+  if (d.cause_on_finer_grid) {
+    const Diagnosis::GridCheck& g = *d.cause_on_finer_grid;
+    nlohmann::json c{{"what", g.fit.proposal}, {"fitted", !g.fit.failed}};
+    if (g.fit.failed) {
+      c["why_not"] = g.fit.failure;
+    } else {
+      c["parameters"] = named(g.fit, false, nullptr);
+      c["heldin_cost"] = g.fit.heldin_cost;
+      c["heldout_cost"] = g.fit.heldout_cost;
+      c["convergence"] = convergence(g.fit);
+      c["seconds"] = g.fit.seconds;
+      nlohmann::json moved = nlohmann::json::array();
+      for (const auto& [name, here, finer] : g.moved) moved.push_back({{"name", name}, {"fit", here}, {"finer_grid", finer}});
+      c["moved"] = moved;
+    }
+    j["cause_on_finer_grid"] = c;
+  }
   j["undecided"] = nlohmann::json::array();
   for (const auto& [candidate, what] : d.undecided) j["undecided"].push_back({{"candidate", candidate}, {"base", what}});
   j["unjudged"] = d.unjudged;

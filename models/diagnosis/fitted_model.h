@@ -3,6 +3,7 @@
 #pragma once
 #include <Eigen/Core>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -10,6 +11,8 @@
 #include "models/sim/problem.h"
 
 namespace ssc {
+
+struct ModelSpec;  // models/diagnosis/model_fit.h
 
 struct DiagnosisOptions {
   std::vector<std::string> fit = {"youngs_modulus"};  // the base model's fitted parameters
@@ -50,6 +53,7 @@ struct FittedModel {
   int starts = 0, converged_starts = 0;
   std::vector<FitStart> per_start;
   std::string proposal;            // what the data proposed (a plane, an interface), if anything
+  std::shared_ptr<const ModelSpec> spec;  // what was fitted: the scene keys and parameters of its model
   double seconds = 0;
 };
 

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <memory>
 #include <cmath>
 #include <random>
 
@@ -177,6 +178,7 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
     const ModelSpec& spec = specs[m];
     FittedModel& fm = models[m];
     fm.name = spec.name;
+    fm.spec = std::make_shared<const ModelSpec>(spec);
     fm.extra = spec.extra;
     fm.names = model_names[m];
     std::vector<std::string> own_overrides = c.overrides, own_fit = o.fit;
