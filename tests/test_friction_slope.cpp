@@ -32,20 +32,37 @@ struct BlockOnSlope {
   bool implicit = true;
   double half_width = 0.1, half_height = 0.1;
   double duration = 1.0;
+  double slope_deg = kSlopeDeg;
+  double youngs_modulus = 2e5, density = 400;
+  double ground_stiffness = 1e7, softmin_alpha = 1e4;
+  double speed = 0;  // initial, down the slope
+  double dt = 0;     // 0: 1/300 s with implicit contact, 1/600 s with linearized
+  double theta = 0.6;
+  double lift = 0;   // of the block's base above the plane at the start, m
 };
 
+// The height at which a level plane's soft-min pressure, (k / alpha) ln(1 + exp(-alpha d)),
+// carries the block's weight.
+double resting_lift(const BlockOnSlope& s) {
+  const double pressure = s.density * kG * 2 * s.half_height;
+  return -std::log(std::expm1(pressure * s.softmin_alpha / s.ground_stiffness)) / s.softmin_alpha;
+}
+
 json block_scene(const BlockOnSlope& s) {
-  const double a = kSlopeDeg * kPi / 180;
+  const double a = s.slope_deg * kPi / 180;
   json j;
   j["object"] = {{"primitive", "box"},
                  {"half_extents", {s.half_width, s.half_height, s.half_width}},
-                 {"position", {0, s.half_height, 0}}};
+                 {"position", {0, s.half_height + s.lift, 0}}};
   j["grid"] = {{"cell_size", 0.025}};
-  j["material"] = {{"youngs_modulus", 2e5}, {"poisson_ratio", 0.3}, {"density", 400}, {"mass_damping", 0.0}};
+  j["material"] = {{"youngs_modulus", s.youngs_modulus}, {"poisson_ratio", 0.3}, {"density", s.density},
+                   {"mass_damping", 0.0}};
   j["gravity"] = {kG * std::sin(a), -kG * std::cos(a), 0};
-  j["ground"] = {{"height", 0.0}, {"stiffness", 1e7}, {"softmin_alpha", 1e4}, {"friction", s.mu}};
-  const double dt = s.implicit ? 1.0 / 300 : 1.0 / 600;
-  j["time"] = {{"dt", dt}, {"steps", int(std::lround(s.duration / dt))}, {"theta", 0.6}};
+  j["initial"] = {{"linear_velocity", {s.speed, 0, 0}}};
+  j["ground"] = {{"height", 0.0}, {"stiffness", s.ground_stiffness}, {"softmin_alpha", s.softmin_alpha},
+                 {"friction", s.mu}};
+  const double dt = s.dt > 0 ? s.dt : s.implicit ? 1.0 / 300 : 1.0 / 600;
+  j["time"] = {{"dt", dt}, {"steps", int(std::lround(s.duration / dt))}, {"theta", s.theta}};
   j["solver"] = {{"tolerance", 1e-10}, {"max_iterations", 5000}, {"contact", s.implicit ? "implicit" : "linearized"}};
   return j;
 }
@@ -135,6 +152,54 @@ TEST(FrictionSlope, TallBlockTipsPastItsEdge) {
   std::printf("tall block (h / w = 3), mu 1.0: largest tilt %.1f deg in %.0f s, moved %.1f mm\n", m.max_tilt_deg,
               s.duration, 1e3 * m.x.back());
   EXPECT_GT(m.max_tilt_deg, 30.0);
+}
+
+BlockOnSlope launched_cube(double youngs_modulus) {
+  BlockOnSlope s;
+  s.slope_deg = 0;
+  s.mu = 0.5;
+  s.youngs_modulus = youngs_modulus, s.density = 500;
+  s.ground_stiffness = 1e8, s.softmin_alpha = 5e3;
+  s.lift = resting_lift(s);
+  s.speed = 1.2;
+  s.dt = 1.0 / 600, s.theta = 0.55;
+  s.duration = 0.4;
+  return s;
+}
+
+// A 0.2 m cube (500 kg/m^3) launched at 1.2 m/s along a level plane with mu = 0.5, on the
+// CalculiX friction cases' ground (k 1e8 Pa/m, soft-min 5000 /m), step (1/600 s, theta 0.55) and
+// 25 mm cells, starting at the height where the ground carries it. A rigid block stops after
+// v0^2 / (2 mu g) = 0.147 m and does not tip (mu < w / h). At E 200 kPa and 1 MPa ssc slides that
+// far within 0.3 % and tilts by 1.9 and 1.0 degrees (its shear under the friction traction
+// included). At CalculiX's 50 kPa it does not: see the disabled test below.
+TEST(FrictionSlope, CubeLaunchedOnALevelPlaneStopsAfterTheCoulombDistanceUntipped) {
+  for (const double E : {2e5, 1e6}) {
+    const BlockOnSlope s = launched_cube(E);
+    const Motion m = run(s);
+    const double expected = s.speed * s.speed / (2 * s.mu * kG);
+    std::printf("cube, E %.0f kPa, v0 %.1f m/s, mu %.1f: stopped after %.4f m (v0^2 / (2 mu g) = %.4f m, %+.1f %%), "
+                "largest tilt %.1f deg\n",
+                E / 1e3, s.speed, s.mu, m.x.back(), expected, 100 * (m.x.back() / expected - 1), m.max_tilt_deg);
+    EXPECT_NEAR(m.x.back(), expected, 0.02 * expected) << "E " << E;
+    EXPECT_LT(m.max_tilt_deg, 3.0) << "E " << E;
+  }
+}
+
+// The same cube at CalculiX's 50 kPa rocks forward by 16 degrees and has slid 15 % short of the
+// distance at 0.4 s. Neither a quarter of the step nor contact points at every vertex of the
+// drawn rest surface (its base's rim included) changed the rocking; a ten times sharper soft-min
+// halved it, and a block a quarter as tall slides within 4 % with half a degree. CalculiX's cube,
+// sliding on its incline, rocks back within 16 mm. Open (docs/diagnosis.md: the friction cases'
+// Young's modulus).
+TEST(FrictionSlope, DISABLED_SoftCubeLaunchedOnALevelPlaneStopsAfterTheCoulombDistanceUntipped) {
+  const BlockOnSlope s = launched_cube(5e4);
+  const Motion m = run(s);
+  const double expected = s.speed * s.speed / (2 * s.mu * kG);
+  std::printf("soft cube, v0 %.1f m/s, mu %.1f: stopped after %.4f m (%+.1f %%), largest tilt %.1f deg\n", s.speed,
+              s.mu, m.x.back(), 100 * (m.x.back() / expected - 1), m.max_tilt_deg);
+  EXPECT_NEAR(m.x.back(), expected, 0.05 * expected);
+  EXPECT_LT(m.max_tilt_deg, 5.0);
 }
 
 }  // namespace
