@@ -167,21 +167,26 @@ TEST_F(DiagnoseCli, NamesFrictionHiddenInDataFromASmallerTimeStep) {
   EXPECT_NE(html.find("friction"), std::string::npos);
   EXPECT_NE(html.find("<svg"), std::string::npos);
   EXPECT_TRUE(fs::exists(dir_ / "diag" / "residuals_friction.csv"));
-  // The cause refitted on the grid control's grid (half the cell size), from its fit: its
-  // values there, and a line that says whether they moved.
-  const json& g = d["cause_on_finer_grid"];
-  ASSERT_TRUE(g.is_object());
-  ASSERT_TRUE(g["fitted"].get<bool>()) << g.dump();
-  EXPECT_NE(g["what"].get<std::string>().find("grid.cell_size"), std::string::npos);
-  EXPECT_GT(g["parameters"]["ground.friction"].get<double>(), 0);
-  EXPECT_GT(g["parameters"]["youngs_modulus"].get<double>(), 0);
-  EXPECT_EQ(g["convergence"]["starts"], 1);
-  const std::string said = g["moved"].empty() ? "moves no parameter" : "depend on the grid";
-  bool told = false;
-  for (const json& line : d["lines"]) told |= line.get<std::string>().find(said) != std::string::npos;
-  EXPECT_TRUE(told) << d["lines"].dump(1);
-  for (const json& m : g["moved"])
-    EXPECT_GE(std::abs(m["finer_grid"].get<double>() / m["fit"].get<double>() - 1), 0.1) << m.dump();
+  // The cause refitted on each control's discretization (half the cell size, half the time
+  // step), from its fit: its values there, and a line that says whether they moved.
+  for (const char* control : {"finer_grid", "finer_step"}) {
+    const json& g = d[std::string("cause_on_") + control];
+    ASSERT_TRUE(g.is_object()) << control;
+    ASSERT_TRUE(g["fitted"].get<bool>()) << g.dump();
+    EXPECT_NE(g["what"].get<std::string>().find(control == std::string("finer_grid") ? "grid.cell_size" : "time.dt"),
+              std::string::npos);
+    EXPECT_GT(g["parameters"]["ground.friction"].get<double>(), 0);
+    EXPECT_GT(g["parameters"]["youngs_modulus"].get<double>(), 0);
+    EXPECT_EQ(g["convergence"]["starts"], 1);
+    const std::string said = g["moved"].empty() ? "moves no parameter"
+                             : control == std::string("finer_grid") ? "depend on the grid"
+                                                                    : "depend on the time step";
+    bool told = false;
+    for (const json& line : d["lines"]) told |= line.get<std::string>().find(said) != std::string::npos;
+    EXPECT_TRUE(told) << d["lines"].dump(1);
+    for (const json& m : g["moved"])
+      EXPECT_GE(std::abs(m[control].get<double>() / m["fit"].get<double>() - 1), 0.1) << m.dump();
+  }
 }
 
 TEST_F(DiagnoseCli, SaysNoneForCleanDataFromASmallerTimeStep) {

@@ -406,54 +406,58 @@ std::vector<std::tuple<std::string, double, double>> moved_base(const FittedMode
   return out;
 }
 
-// After the verdict: a physical cause refitted on the finer_grid control's grid, from its fit, with the
-// base's cost threshold (as the control). The control refits the base model only; a cause's
-// values can depend on the grid where the base's do not: on 25 mm cells a soft cube sliding
-// with friction tips over where on 12.5 mm cells it rocks back, and the modulus fitted with
-// friction is a third higher (docs/diagnosis.md). Not run for a measurement cause, or where the
-// grid control did not run.
-void refit_cause_on_finer_grid(Diagnosis& d, const DiagnosisContext& c, const Scene& scene, const FittedModel& m) {
+// After the verdict: a physical cause refitted on each discretization control's discretization,
+// from its fit, with the base's cost threshold (as the control). The controls refit the base
+// model only; a cause's values can depend on the discretization where the base's do not: on
+// 25 mm cells a soft cube sliding with friction tips over where on 12.5 mm cells it rocks back,
+// and the modulus fitted with friction is a third higher (docs/diagnosis.md). Not run for a
+// measurement cause, or for a control that did not run. The refits run side by side.
+void refit_cause_on_controls(Diagnosis& d, const DiagnosisContext& c, const Scene& scene, const FittedModel& m) {
   const ExtensionRow* row = find_extension(m.name);
-  const auto control = std::find_if(d.controls.begin(), d.controls.end(),
-                                    [](const Diagnosis::Control& k) { return k.fit.name == "finer_grid"; });
-  if (!row || row->fit == ExtensionRow::Fit::Measurement || !m.spec || control == d.controls.end() ||
-      control->fit.failed)
-    return;
-  std::string skipped;
-  const ModelSpec grid = finer_grid_spec(scene, &skipped);
-  if (!skipped.empty()) return;
-  ModelSpec spec = *m.spec;
-  spec.name = m.name + " on the finer grid";
-  spec.overrides.insert(spec.overrides.end(), grid.overrides.begin(), grid.overrides.end());
-  spec.note = grid.note;
-  DiagnosisContext same_cost = c;
-  same_cost.phi_max = d.base.problem.phi_max;
-  std::vector<std::map<std::string, double>> start = {values_by_name(m)};
-  Diagnosis::GridCheck check;
-  try {
-    check.fit = std::move(fit_together({spec}, same_cost, start)[0]);
-  } catch (const std::exception& e) {
-    check.fit.failed = true;
-    check.fit.failure = e.what();
+  if (!row || row->fit == ExtensionRow::Fit::Measurement || !m.spec) return;
+  std::vector<ModelSpec> specs;
+  for (const Diagnosis::Control& k : d.controls) {
+    std::string skipped;
+    if (k.fit.failed || k.fit.frame_costs.empty()) continue;
+    const ModelSpec control = discretization_spec(k.fit.name, scene, &skipped);
+    if (!skipped.empty()) continue;
+    ModelSpec spec = *m.spec;
+    spec.name = m.name + " with " + k.fit.name;
+    spec.overrides.insert(spec.overrides.end(), control.overrides.begin(), control.overrides.end());
+    spec.note = control.note;
+    specs.push_back(spec);
+    d.cause_on_controls.push_back({k.fit.name, {}, {}});
   }
-  check.fit.proposal = grid.note;
-  if (!check.fit.failed) check.moved = moved_base(m, check.fit);
-  d.cause_on_finer_grid = std::move(check);
+  const std::map<std::string, double> fitted = values_by_name(m);
+  side_by_side(specs.size(), c.options.device, [&](size_t k, const std::string& device) {
+    DiagnosisContext on = c;
+    on.phi_max = d.base.problem.phi_max;
+    on.options.device = device;
+    Diagnosis::DiscretizationCheck& check = d.cause_on_controls[k];
+    std::vector<std::map<std::string, double>> start = {fitted};
+    try {
+      check.fit = std::move(fit_together({specs[k]}, on, start)[0]);
+    } catch (const std::exception& e) {
+      check.fit.failed = true;
+      check.fit.failure = e.what();
+    }
+    check.fit.proposal = specs[k].note;
+    if (!check.fit.failed) check.moved = moved_base(m, check.fit);
+  });
 }
 
-// What the grid check found, for the printed lines.
-std::string finer_grid_line(const Diagnosis& d) {
-  const Diagnosis::GridCheck& g = *d.cause_on_finer_grid;
-  if (g.fit.failed) return fmt::format("the {} fit on the finer grid failed: {}", d.cause, g.fit.failure);
-  if (g.moved.empty())
-    return fmt::format("on {}, the {} fit moves no parameter by 10 % or more", g.fit.proposal, d.cause);
+// What a discretization check found, for the printed lines.
+std::string control_check_line(const Diagnosis::DiscretizationCheck& g, const std::string& cause) {
+  const bool grid = g.control == "finer_grid";
+  if (g.fit.failed) return fmt::format("the {} fit on {} failed: {}", cause, g.fit.proposal, g.fit.failure);
+  if (g.moved.empty()) return fmt::format("on {}, the {} fit moves no parameter by 10 % or more", g.fit.proposal, cause);
   std::string moved;
-  for (const auto& [name, here, finer] : g.moved)
+  for (const auto& [name, here, there] : g.moved)
     moved += fmt::format("{}{} from {} to {} ({:+.0f} %)", moved.empty() ? "" : ", ", name, with_unit(name, here),
-                         with_unit(name, finer), 100 * (finer / here - 1));
-  return fmt::format("on {}, the {} fit moves {}: its values depend on the grid; refit on the finer grid before "
-                     "trusting them",
-                     g.fit.proposal, d.cause, moved);
+                         with_unit(name, there), 100 * (there / here - 1));
+  return fmt::format("on {}, the {} fit moves {}: its values depend on the {}; refit {} before trusting them",
+                     g.fit.proposal, cause, moved, grid ? "grid" : "time step",
+                     grid ? "on the finer grid" : "with the smaller time step");
 }
 
 // Step 5 (with no cause): candidates the data cannot tell from the base. Both gains, on the
@@ -833,13 +837,13 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
       slices_failure = e.what();
     }
     if (m.name == d.cause) {
-      say("the " + m.name + " fit on the finer grid");
-      refit_cause_on_finer_grid(d, c, scene, m);
+      say("the " + m.name + " fit on the controls' discretizations");
+      refit_cause_on_controls(d, c, scene, m);
     }
   }
   tell(d, o, named);
   if (!slices_failure.empty()) d.lines.push_back("the held-in cost along the cause's parameters failed: " + slices_failure);
-  if (d.cause_on_finer_grid) d.lines.push_back(finer_grid_line(d));
+  for (const Diagnosis::DiscretizationCheck& g : d.cause_on_controls) d.lines.push_back(control_check_line(g, d.cause));
   d.seconds = seconds_since(t0);
   return d;
 }

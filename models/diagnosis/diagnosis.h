@@ -41,7 +41,6 @@
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -68,14 +67,16 @@ struct Diagnosis {
     double gain = 0, gain_low = 0, gain_high = 0;
   };
   std::vector<Control> controls;
-  // The cause refitted on the finer_grid control's grid, from its fit: the grid control refits
-  // the base model only, and a cause's values can depend on the grid where the base's do not.
-  // Run where the cause is a physical extension and that control ran.
-  struct GridCheck {
-    FittedModel fit;  // failed with the reason where its fit failed
-    std::vector<std::tuple<std::string, double, double>> moved;  // by 10 % or more: (name, this grid, the finer)
+  // The cause refitted on each control's discretization (half the cell size, half the time
+  // step), from its fit: the controls refit the base model only, and a cause's values can
+  // depend on the discretization where the base's do not. Run where the cause is a physical
+  // extension, for each control that ran, in the order of discretization_controls().
+  struct DiscretizationCheck {
+    std::string control;  // finer_grid or finer_step
+    FittedModel fit;      // failed with the reason where its fit failed
+    std::vector<std::tuple<std::string, double, double>> moved;  // by 10 % or more: (name, as fitted, there)
   };
-  std::optional<GridCheck> cause_on_finer_grid;
+  std::vector<DiscretizationCheck> cause_on_controls;
   std::string cause = "none";
   // Physical candidates that passed beside a measurement cause: fitted to the frames as
   // recorded, they are judged once the recording is corrected.

@@ -1,6 +1,7 @@
 // diagnosis.json (see diagnosis.h).
 #include <cmath>
 
+#include "models/diagnosis/candidates.h"
 #include "models/diagnosis/diagnosis.h"
 #include "models/diagnosis/model_fit.h"
 
@@ -100,9 +101,8 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
     controls.push_back(c);
   }
   j["discretization_controls"] = controls;
-  j["cause_on_finer_grid"] = nullptr;
-  if (d.cause_on_finer_grid) {
-    const Diagnosis::GridCheck& g = *d.cause_on_finer_grid;
+  for (const std::string& control : discretization_controls()) j["cause_on_" + control] = nullptr;
+  for (const Diagnosis::DiscretizationCheck& g : d.cause_on_controls) {
     nlohmann::json c{{"what", g.fit.proposal}, {"fitted", !g.fit.failed}};
     if (g.fit.failed) {
       c["why_not"] = g.fit.failure;
@@ -113,10 +113,10 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
       c["convergence"] = convergence(g.fit);
       c["seconds"] = g.fit.seconds;
       nlohmann::json moved = nlohmann::json::array();
-      for (const auto& [name, here, finer] : g.moved) moved.push_back({{"name", name}, {"fit", here}, {"finer_grid", finer}});
+      for (const auto& [name, here, there] : g.moved) moved.push_back({{"name", name}, {"fit", here}, {g.control, there}});
       c["moved"] = moved;
     }
-    j["cause_on_finer_grid"] = c;
+    j["cause_on_" + g.control] = c;
   }
   j["undecided"] = nlohmann::json::array();
   for (const auto& [candidate, what] : d.undecided) j["undecided"].push_back({{"candidate", candidate}, {"base", what}});

@@ -239,6 +239,8 @@ def run_case(c, a):
          "indistinguishable": j.get("identifiability", {}).get("indistinguishable", []),
          "finer_grid_moved": {m["name"]: [m["fit"], m["finer_grid"]]
                               for m in (j.get("cause_on_finer_grid") or {}).get("moved", [])},
+         "finer_step_moved": {m["name"]: [m["fit"], m["finer_step"]]
+                              for m in (j.get("cause_on_finer_step") or {}).get("moved", [])},
          "seconds": wall, "device": a.device}
     print(f"{c['name']:32s} effect {c['effect']:24s} named {j['cause']:24s} "
           f"gain {x['gain'] if x['gain'] is not None else float('nan'):.2f} E {E_final:.4g} (true {E_true:.4g}) "
