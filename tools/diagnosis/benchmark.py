@@ -185,6 +185,15 @@ def nominal_off(fit):  # the fit's nominal Young's modulus is not the truth
 def run(cmd, **kw):
     return subprocess.run(cmd, capture_output=True, text=True, **kw)
 
+def refit_moved(diagnosis, control):
+    """What moved when the named cause was refitted on the control's discretization: {name: [as
+    fitted, there]}; None where it was not refitted there (no physical cause, or the control did
+    not run or its refit failed)."""
+    check = diagnosis.get("cause_on_" + control)
+    if not check or not check.get("fitted"):
+        return None
+    return {m["name"]: [m["fit"], m[control]] for m in check.get("moved", [])}
+
 def run_case(c, a):
     d = os.path.join(a.work, c["name"].replace(" ", "_").replace("/", "_").replace(",", "").replace("%", "pc"))
     os.makedirs(d, exist_ok=True)
@@ -237,10 +246,8 @@ def run_case(c, a):
          "converged_starts": sum(m.get("convergence", {}).get("converged_starts", 0) for m in models),
          "starts": sum(m.get("convergence", {}).get("starts", 0) for m in models),
          "indistinguishable": j.get("identifiability", {}).get("indistinguishable", []),
-         "finer_grid_moved": {m["name"]: [m["fit"], m["finer_grid"]]
-                              for m in (j.get("cause_on_finer_grid") or {}).get("moved", [])},
-         "finer_step_moved": {m["name"]: [m["fit"], m["finer_step"]]
-                              for m in (j.get("cause_on_finer_step") or {}).get("moved", [])},
+         "finer_grid_moved": refit_moved(j, "finer_grid"),
+         "finer_step_moved": refit_moved(j, "finer_step"),
          "seconds": wall, "device": a.device}
     print(f"{c['name']:32s} effect {c['effect']:24s} named {j['cause']:24s} "
           f"gain {x['gain'] if x['gain'] is not None else float('nan'):.2f} E {E_final:.4g} (true {E_true:.4g}) "
@@ -331,13 +338,23 @@ def main():
         json.dump(results, open(a.json, "w"), indent=1)
         open(a.json + ".md", "w").write(markdown(results) + "\n" + confusion(results))
 
+def moved(r, control):
+    """The named cause's parameters that moved by 10 % or more when it was refitted on the
+    control's discretization, as factors (E x0.64); "-" for none, "" where not run."""
+    m = r.get(control + "_moved")
+    if m is None:
+        return ""
+    short = {"youngs_modulus": "E", "ground.friction": "mu"}
+    return ", ".join(f"{short.get(k, k.split('.')[-1])} x{b / a:.2f}" for k, (a, b) in m.items() if a) or "-"
+
 def markdown(results):
     """The table of docs/diagnosis.md."""
     rows = ["| case | effect | strength | data | named | gain (90 % interval) | its placebo | held-out cost before -> after | "
-            "E fitted / true | converged | confounded | time |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+            "E fitted / true | moved on the finer grid / step | converged | confounded | time |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in results:
         if r.get("cause") in ("failed", "observe failed"):
-            rows.append(f"| {r['name']} | {r['effect']} | {r['strength']} | | **{r['cause']}** | | | | | | | |"); continue
+            rows.append(f"| {r['name']} | {r['effect']} | {r['strength']} | | **{r['cause']}** | | | | | | | | |"); continue
         data = r.get("cross") or "same"
         named = r["cause"] if r["cause"] == r["effect"] else f"**{r['cause']}**"
         if r["cause"] == "none" and r["effect"] != "none":
@@ -349,8 +366,10 @@ def markdown(results):
         conf = "; ".join(f"{x} / {y}" for x, y in r.get("confounded", [])) or "-"
         E = (f"{r['youngs_final'] / r['youngs_true']:.2f}" if r.get("youngs_final") and r.get("youngs_true") else "-")
         conv = f"{r['converged_starts']}/{r['starts']}" if r.get("starts") else "-"
+        refit = f"{moved(r, 'finer_grid')} / {moved(r, 'finer_step')}"
+        refit = "" if refit == " / " else refit
         rows.append(f"| {r['name']} | {r['effect']} | {r['strength']} | {data} | {named} | {gain} | {placebo} | "
-                    f"{r['heldout_before']:.3g}{after} | {E} | {conv} | {conf} | {r['seconds']:.1f} s |")
+                    f"{r['heldout_before']:.3g}{after} | {E} | {refit} | {conv} | {conf} | {r['seconds']:.1f} s |")
     return "\n".join(rows) + "\n"
 
 if __name__ == "__main__":
