@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <deque>
@@ -161,26 +162,42 @@ void build_node_cell_incidence(SimGrid& g) {
 constexpr int kCellEdges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
                                    {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
 
+// Contact points: where the rest surface crosses a cell edge (phi < 0 at one end, > 0 at the
+// other), and every surface node (phi = 0 after the zero cutoff) of an active cell. A box whose
+// faces lie on grid planes has its surface on nodes: with crossings alone its rims got no point
+// (all their edges lead to surface nodes or out), its base's points stopped a cell short of its
+// edges, and a soft cube sliding with friction tipped over the row before them
+// (docs/diagnosis.md). Each cell's cut surface area is shared equally among its points.
 void build_contact_points(SimGrid& g) {
-  std::map<std::pair<int, int>, int> edge_point;
+  std::map<std::pair<int, int>, int> point_of;  // (a, b) for an edge's crossing, (n, n) for a surface node
   for (int e = 0; e < g.cell_count; ++e) {
     const auto idx = corner_indices(g.sdf, g.cell_origin[e]);
     std::vector<int> cell_points;
-    for (const auto& edge : kCellEdges) {
-      const double pa = g.sdf.phi[idx[edge[0]]], pb = g.sdf.phi[idx[edge[1]]];
-      if ((pa < 0) == (pb < 0)) continue;
-      const int na = g.cell_nodes[8 * e + edge[0]], nb = g.cell_nodes[8 * e + edge[1]];
-      const auto key = std::make_pair(na, nb);
-      auto it = edge_point.find(key);
-      if (it == edge_point.end()) {
-        ContactPoint p;
-        p.node_a = na;
-        p.node_b = nb;
-        p.t = pa / (pa - pb);
-        it = edge_point.emplace(key, int(g.contact_points.size())).first;
+    auto add = [&](std::pair<int, int> key, const ContactPoint& p) {
+      auto it = point_of.find(key);
+      if (it == point_of.end()) {
+        it = point_of.emplace(key, int(g.contact_points.size())).first;
         g.contact_points.push_back(p);
       }
-      cell_points.push_back(it->second);
+      if (std::find(cell_points.begin(), cell_points.end(), it->second) == cell_points.end())
+        cell_points.push_back(it->second);
+    };
+    for (const auto& edge : kCellEdges) {
+      const double pa = g.sdf.phi[idx[edge[0]]], pb = g.sdf.phi[idx[edge[1]]];
+      if (pa == 0 || pb == 0 || (pa < 0) == (pb < 0)) continue;
+      ContactPoint p;
+      p.node_a = g.cell_nodes[8 * e + edge[0]];
+      p.node_b = g.cell_nodes[8 * e + edge[1]];
+      p.t = pa / (pa - pb);
+      add({p.node_a, p.node_b}, p);
+    }
+    for (int c = 0; c < 8; ++c) {
+      if (g.sdf.phi[idx[c]] != 0) continue;
+      ContactPoint p;  // at node_b, node_a (the opposite corner) weighted 0
+      p.node_a = g.cell_nodes[8 * e + (c ^ 7)];
+      p.node_b = g.cell_nodes[8 * e + c];
+      p.t = 1;
+      add({p.node_b, p.node_b}, p);
     }
     for (int p : cell_points) g.contact_points[p].area += g.cell_area[e] / double(cell_points.size());
   }

@@ -6,8 +6,9 @@
 //    distance of band_width from an active node; band_width <= 0 means the whole grid;
 //  - each active cell stores its 8 cut-cell volume weights (integral of N_c over the
 //    body part of the cell) and surface weights;
-//  - contact points are the crossings of the rest surface with the edges of active cells,
-//    each carrying a share of the cut surface area.
+//  - contact points are the crossings of the rest surface with the edges of active cells and
+//    the surface nodes (phi = 0) of active cells, each carrying a share of the cut surface area
+//    (the paper takes the crossings alone, so a box on grid planes had none on its rims).
 // Node<->cell and node<->point incidence lists (fixed order) turn every element-to-node
 // sum into a deterministic gather.
 #pragma once
