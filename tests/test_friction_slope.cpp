@@ -181,7 +181,7 @@ BlockOnSlope launched_cube(double youngs_modulus, bool lifted) {
 // A rigid block stops after v0^2 / (2 mu g) = 0.147 m and does not tip (mu < w / h). The soft
 // cube (50 kPa) shears and rocks on the penalty ground; before its rims carried contact points
 // its base's points stopped 25 mm short of its front edge, and it tipped over the row before it
-// (50 degrees) and tumbled on.
+// (49 degrees) and tumbled on.
 TEST(FrictionSlope, CubeLaunchedOnALevelPlaneStopsAfterTheCoulombDistanceUntipped) {
   for (const double E : {5e4, 2e5, 1e6}) {
     const BlockOnSlope s = launched_cube(E, false);
