@@ -1,13 +1,14 @@
 // Soft-min penalty contact with ground planes, treated implicitly as in the paper.
 //
-// Test points sit where the rest-pose surface crosses a grid edge between active nodes
-// a and b (parameter t), each carrying a share A of the surface area. For a plane with
+// Test points sit on the rest-pose surface inside active cells and move with their cell's
+// trilinear interpolation (weights w_c over its 8 corners), each carrying a share A of the
+// surface area. For a plane with
 // unit normal n and height d (signed distance n.x - d), the penalty force magnitude is
 //   f_cur = -k A softmin(dist),  fdot = -k A softmin'(dist) (n.v),
 //   f     = theta (f_cur + dt fdot) + (1 - theta) f_cur,
 // the first-order Taylor prediction of the next step's force blended with the theta of
 // the time integrator. softmin(x) = -log(1 + exp(-alpha x)) / alpha. The force f n is
-// split onto the two edge nodes with weights (1 - t, t).
+// split onto the cell's corners with the weights w_c.
 #pragma once
 #include "ops/gather.h"
 #include "ops/part.h"
@@ -118,36 +119,41 @@ SSC_HD inline int load_ground_planes(const Real* q, int n, GroundPlane<Real>* pl
   return n;
 }
 
-// Contact point i sits at (1 - t, t) between the active nodes point_nodes[2i], [2i + 1] of
-// an edge: its position (rest + displacement) and velocity.
+// Contact point i's position (rest + displacement) and velocity: the weighted sum over its
+// cell's corners (ops/gather.h).
 template <class Real>
-SSC_HD inline void contact_point_state(int i, const int* point_nodes, const Real* point_t, const Real* node_rest,
+SSC_HD inline void contact_point_state(int i, const int* point_nodes, const Real* point_weights, const Real* node_rest,
                                        const Real* u, const Real* v, Vec3<Real>& x, Vec3<Real>& vel) {
-  const int na = point_nodes[2 * i], nb = point_nodes[2 * i + 1];
-  const Real t = point_t[i];
-  x = (Real(1) - t) * (load3(node_rest, na) + load3(u, na)) + t * (load3(node_rest, nb) + load3(u, nb));
-  vel = (Real(1) - t) * load3(v, na) + t * load3(v, nb);
+  x = zero3<Real>();
+  vel = zero3<Real>();
+  for (int c = kPointNodes * i; c < kPointNodes * (i + 1); ++c) {
+    const Real w = point_weights[c];
+    if (w == Real(0)) continue;
+    const int n = point_nodes[c];
+    x += w * (load3(node_rest, n) + load3(u, n));
+    vel += w * load3(v, n);
+  }
 }
 
 // ---- the contact op: one contact point each ----
 
 template <class Real>
-SSC_HD inline void contact_force_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_t,
+SSC_HD inline void contact_force_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_weights,
                                        const Real* point_area, const Real* node_rest, const Real* u_prev,
                                        const Real* v_prev, const Real* ground_planes, const Real* dt, const Real* theta,
                                        Real* point_force) {
   GroundPlane<Real> planes[kMaxGroundPlanes];
   const int plane_count = load_ground_planes(ground_planes, cx.n_plane, planes);
   Vec3<Real> x, vel;
-  contact_point_state(i, point_nodes, point_t, node_rest, u_prev, v_prev, x, vel);
+  contact_point_state(i, point_nodes, point_weights, node_rest, u_prev, v_prev, x, vel);
   store3(point_force, i, contact_force(x, vel, point_area[i], planes, plane_count, dt[0], theta[0]));
 }
 
-// The point's position and velocity cotangents (x_bar, v_bar; gathered to the edge's nodes by
+// The point's position and velocity cotangents (x_bar, v_bar; gathered to the point's corners by
 // the next parts) and its share of the planes' (plane_bar_share, laid out like the planes'
 // tensor; summed over the points by a reduction).
 template <class Real>
-SSC_HD inline void adj_contact_force_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_t,
+SSC_HD inline void adj_contact_force_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_weights,
                                            const Real* point_area, const Real* node_rest, const Real* u_prev,
                                            const Real* v_prev, const Real* ground_planes, const Real* dt,
                                            const Real* theta, const Real* point_force_bar, Real* x_bar, Real* v_bar,
@@ -155,7 +161,7 @@ SSC_HD inline void adj_contact_force_point(int i, const PartContext<Real>& cx, c
   GroundPlane<Real> planes[kMaxGroundPlanes];
   const int plane_count = load_ground_planes(ground_planes, cx.n_plane, planes);
   Vec3<Real> x, vel, xb = zero3<Real>(), vb = zero3<Real>();
-  contact_point_state(i, point_nodes, point_t, node_rest, u_prev, v_prev, x, vel);
+  contact_point_state(i, point_nodes, point_weights, node_rest, u_prev, v_prev, x, vel);
   Vec3<Real> normal_bar[kMaxGroundPlanes];
   Real height_bar[kMaxGroundPlanes], stiffness_bar[kMaxGroundPlanes], alpha_bar[kMaxGroundPlanes];
   for (int k = 0; k < plane_count; ++k) {
@@ -183,15 +189,15 @@ inline OpSpec contact_force_spec() {
              constant_in("theta"), out("point_force")};
   s.scratch = {{"xbar", Domain::Point, 3, ""}, {"vbar", Domain::Point, 3, ""}, {"planebar", Domain::Point, 0, "ground_planes"}};
   s.forward = {part("contact_force", Extent::Point, SSC_PART(contact_force_point),
-                    {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "u_prev^", "v_prev^", "ground_planes", "dt",
+                    {"#point_nodes", "#point_weights", "#point_area", "#node_rest^", "u_prev^", "v_prev^", "ground_planes", "dt",
                      "theta", "point_force"})};
   s.adjoint = {part("contact_force", Extent::Point, SSC_ADJOINT_PART(adj_contact_force_point),
-                    {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "u_prev^", "v_prev^", "ground_planes", "dt",
+                    {"#point_nodes", "#point_weights", "#point_area", "#node_rest^", "u_prev^", "v_prev^", "ground_planes", "dt",
                      "theta", "d_point_force", "$xbar", "$vbar", "$planebar"}),
                part("contact_force_gather", Extent::Node, SSC_ADJOINT_PART(add_point_sum),
-                    {"$xbar^", "#point_t", "#node_point_offset", "#node_point_entry", "d_u_prev"}),
+                    {"$xbar^", "#point_weights", "#node_point_offset", "#node_point_entry", "d_u_prev"}),
                part("contact_force_gather", Extent::Node, SSC_ADJOINT_PART(add_point_sum),
-                    {"$vbar^", "#point_t", "#node_point_offset", "#node_point_entry", "d_v_prev"}),
+                    {"$vbar^", "#point_weights", "#node_point_offset", "#node_point_entry", "d_v_prev"}),
                reduction("contact_force_reduce", {"$planebar"}, {"d_ground_planes"})};
   return s;
 }

@@ -13,7 +13,7 @@
 // f . (u - u-) - (theta - 1/2) |v - v-|_M^2 <= f . (u - u-); with f = -grad U at the end point
 // and U convex (the soft-min penalty is), f . (u - u-) <= U(u-) - U(u): at convergence the
 // contact never adds energy, whatever its stiffness and the step. (At the theta-point it can.)
-// K is lumped to the edge's nodes with the weights (1 - t, t) of the force split (row-sum
+// K is lumped to the point's corners with the weights w_c of the force split (row-sum
 // lumping: Newton's fixed point is exact, its convergence a little slower). The engine's
 // node-local matrix C (ops/newmark.h) then carries dt K, and since its right-hand side adds
 // C (u- + dt v-), the op's node force adds K (u_k - u- - dt v-). The graph unrolls
@@ -104,13 +104,13 @@ SSC_HD inline void adj_plane_contact_stiffness(const GroundPlane<Real>& g, Real 
 // stiffness K (point_stiffness, 6 a point).
 template <class Real>
 SSC_HD inline void contact_implicit_point(int i, const PartContext<Real>& cx, const int* point_nodes,
-                                          const Real* point_t, const Real* point_area, const Real* node_rest,
+                                          const Real* point_weights, const Real* point_area, const Real* node_rest,
                                           const Real* guess, const Real* ground_planes, const Real* point_force_in,
                                           Real* point_force, Real* point_stiffness) {
   GroundPlane<Real> planes[kMaxGroundPlanes];
   const int plane_count = load_ground_planes(ground_planes, cx.n_plane, planes);
   Vec3<Real> x, unused;
-  contact_point_state(i, point_nodes, point_t, node_rest, guess, guess, x, unused);
+  contact_point_state(i, point_nodes, point_weights, node_rest, guess, guess, x, unused);
   Vec3<Real> f = point_force_in ? load3(point_force_in, i) : zero3<Real>();
   Real K[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
   for (int p = 0; p < plane_count; ++p) plane_contact_stiffness(planes[p], point_area[i], x, f, K);
@@ -122,28 +122,28 @@ SSC_HD inline void contact_implicit_point(int i, const PartContext<Real>& cx, co
 // to the adjoint of a kept step).
 template <class Real>
 SSC_HD inline void contact_implicit_point_stiffness(int i, const PartContext<Real>& cx, const int* point_nodes,
-                                                    const Real* point_t, const Real* point_area, const Real* node_rest,
+                                                    const Real* point_weights, const Real* point_area, const Real* node_rest,
                                                     const Real* guess, const Real* ground_planes,
                                                     Real* point_stiffness) {
   GroundPlane<Real> planes[kMaxGroundPlanes];
   const int plane_count = load_ground_planes(ground_planes, cx.n_plane, planes);
   Vec3<Real> x, unused, f = zero3<Real>();
-  contact_point_state(i, point_nodes, point_t, node_rest, guess, guess, x, unused);
+  contact_point_state(i, point_nodes, point_weights, node_rest, guess, guess, x, unused);
   Real K[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
   for (int p = 0; p < plane_count; ++p) plane_contact_stiffness(planes[p], point_area[i], x, f, K);
   for (int j = 0; j < 6; ++j) point_stiffness[6 * i + j] = K[j];
 }
 
 // Node i: C += dt K_i and the force K_i (u_k - u- - dt v-) (the iterate's offset; added to
-// force_in, air drag's, where given), K_i the (1 - t, t)-weighted sum of its points' K.
+// force_in, air drag's, where given), K_i the w_c-weighted sum of its points' K.
 template <class Real>
 SSC_HD inline void contact_implicit_node(int i, const PartContext<Real>&, const Real* point_stiffness,
-                                         const Real* point_t, const int* node_point_offset,
+                                         const Real* point_weights, const int* node_point_offset,
                                          const int* node_point_entry, const Real* offset, const Real* dt,
                                          const Real* damping_in, const Real* force_in, Real* damping,
                                          Real* node_force) {
   Real K[6];
-  gather_point_sym3(point_stiffness, point_t, node_point_offset, node_point_entry, i, K);
+  gather_point_sym3(point_stiffness, point_weights, node_point_offset, node_point_entry, i, K);
   for (int j = 0; j < 6; ++j) damping[6 * i + j] = (damping_in ? damping_in[6 * i + j] : Real(0)) + dt[0] * K[j];
   const Vec3<Real> f = sym3_apply(K, 0, load3(offset, i));
   store3(node_force, i, force_in ? load3(force_in, i) + f : f);
@@ -153,12 +153,12 @@ SSC_HD inline void contact_implicit_node(int i, const PartContext<Real>&, const 
 // the offset's.
 template <class Real>
 SSC_HD inline void adj_contact_implicit_node(int i, const PartContext<Real>&, const Real* point_stiffness,
-                                             const Real* point_t, const int* node_point_offset,
+                                             const Real* point_weights, const int* node_point_offset,
                                              const int* node_point_entry, const Real* offset, const Real* dt,
                                              const Real* damping_bar, const Real* node_force_bar, Real* K_bar,
                                              Real* offset_bar, Real* damping_in_bar, Real* force_in_bar) {
   Real K[6];
-  gather_point_sym3(point_stiffness, point_t, node_point_offset, node_point_entry, i, K);
+  gather_point_sym3(point_stiffness, point_weights, node_point_offset, node_point_entry, i, K);
   const Vec3<Real> fb = load3(node_force_bar, i);
   for (int j = 0; j < 6; ++j) K_bar[6 * i + j] = dt[0] * damping_bar[6 * i + j];
   adj_sym3_apply(K_bar, i, load3(offset, i), fb);
@@ -170,23 +170,21 @@ SSC_HD inline void adj_contact_implicit_node(int i, const PartContext<Real>&, co
 
 // Point i: its position's cotangent (x_bar, gathered to the iterate's nodes by the next part)
 // and its shares of the planes' (laid out like their tensor; summed by a reduction), from its
-// force's and (gathered from its edge's nodes) its stiffness's cotangents.
+// force's and (gathered from its corners) its stiffness's cotangents.
 template <class Real>
 SSC_HD inline void adj_contact_implicit_point(int i, const PartContext<Real>& cx, const int* point_nodes,
-                                              const Real* point_t, const Real* point_area, const Real* node_rest,
+                                              const Real* point_weights, const Real* point_area, const Real* node_rest,
                                               const Real* guess, const Real* ground_planes, const Real* K_bar,
                                               const Real* point_force_bar, Real* point_force_in_bar, Real* x_bar,
                                               Real* plane_bar_share) {
   GroundPlane<Real> planes[kMaxGroundPlanes];
   const int plane_count = load_ground_planes(ground_planes, cx.n_plane, planes);
   Vec3<Real> x, unused, xb = zero3<Real>();
-  contact_point_state(i, point_nodes, point_t, node_rest, guess, guess, x, unused);
+  contact_point_state(i, point_nodes, point_weights, node_rest, guess, guess, x, unused);
   const Vec3<Real> fb = load3(point_force_bar, i);
   if (point_force_in_bar) add3(point_force_in_bar, i, fb);
-  const Real t = point_t[i];
-  const int na = point_nodes[2 * i], nb = point_nodes[2 * i + 1];
   Real Kb[6];
-  for (int j = 0; j < 6; ++j) Kb[j] = (Real(1) - t) * K_bar[6 * na + j] + t * K_bar[6 * nb + j];
+  point_sym3(i, point_nodes, point_weights, K_bar, Kb);
   Real* pb = plane_bar_share + kPlaneValues * cx.n_plane * i;
   for (int j = 0; j < kPlaneValues * cx.n_plane; ++j) pb[j] = Real(0);
   for (int p = 0; p < plane_count; ++p, pb += kPlaneValues) {
@@ -228,21 +226,21 @@ inline OpSpec contact_implicit_spec() {
                {"xbar", Domain::Point, 3, ""},
                {"planebar", Domain::Point, 0, "ground_planes"}};
   s.forward = {part("contact_implicit", Extent::Point, SSC_PART(contact_implicit_point),
-                    {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "guess^", "ground_planes",
+                    {"#point_nodes", "#point_weights", "#point_area", "#node_rest^", "guess^", "ground_planes",
                      "point_force_in", "point_force", "$pstiff"}),
                part("contact_implicit_nodes", Extent::Node, SSC_PART(contact_implicit_node),
-                    {"$pstiff^", "#point_t", "#node_point_offset", "#node_point_entry", "offset", "dt", "damping_in",
+                    {"$pstiff^", "#point_weights", "#node_point_offset", "#node_point_entry", "offset", "dt", "damping_in",
                      "force_in", "damping", "node_force"})};
   s.adjoint = {part("contact_implicit_stiffness", Extent::Point, SSC_ADJOINT_PART(contact_implicit_point_stiffness),
-                    {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "guess^", "ground_planes", "$pstiff"}),
+                    {"#point_nodes", "#point_weights", "#point_area", "#node_rest^", "guess^", "ground_planes", "$pstiff"}),
                part("contact_implicit_nodes", Extent::Node, SSC_ADJOINT_PART(adj_contact_implicit_node),
-                    {"$pstiff^", "#point_t", "#node_point_offset", "#node_point_entry", "offset", "dt", "d_damping",
+                    {"$pstiff^", "#point_weights", "#node_point_offset", "#node_point_entry", "offset", "dt", "d_damping",
                      "d_node_force", "$kbar", "d_offset", "d_damping_in", "d_force_in"}),
                part("contact_implicit", Extent::Point, SSC_ADJOINT_PART(adj_contact_implicit_point),
-                    {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "guess^", "ground_planes", "$kbar^",
+                    {"#point_nodes", "#point_weights", "#point_area", "#node_rest^", "guess^", "ground_planes", "$kbar^",
                      "d_point_force", "d_point_force_in", "$xbar", "$planebar"}),
                part("contact_implicit_gather", Extent::Node, SSC_ADJOINT_PART(add_point_sum),
-                    {"$xbar^", "#point_t", "#node_point_offset", "#node_point_entry", "d_guess"}),
+                    {"$xbar^", "#point_weights", "#node_point_offset", "#node_point_entry", "d_guess"}),
                reduction("contact_implicit_reduce", {"$planebar"}, {"d_ground_planes"})};
   return s;
 }

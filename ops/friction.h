@@ -7,8 +7,8 @@
 // of magnitude mu N |w| / s: Coulomb's mu N when sliding (|w| >> eps), a viscous mu N w / eps
 // below eps. The step takes it as the damper the start of the step gives,
 //   f(v) = -C w(v),  C = mu N P / s(v-),  P = I - n n^T,
-// i.e. f(v-) - C (v - v-) with C in the system matrix (ops/newmark.h), lumped to the edge's
-// nodes with the weights (1 - t, t) that split the force. It opposes the end-of-step sliding
+// i.e. f(v-) - C (v - v-) with C in the system matrix (ops/newmark.h), lumped to the point's
+// corners with the weights that split the force. It opposes the end-of-step sliding
 // velocity whatever the step does, so it never adds energy. (The velocity Jacobian
 // mu N (P / s - w w^T / s^3) instead makes the step explicit along w once |w| > eps: a node
 // whose friction impulse dt mu N / m exceeds its |w| then overshoots every step, and on a cube
@@ -97,14 +97,14 @@ SSC_HD inline void adj_plane_friction(const GroundPlane<Real>& g, Real mu, Real 
 // ---- the friction op ----
 
 template <class Real>
-SSC_HD inline void friction_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_t,
+SSC_HD inline void friction_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_weights,
                                   const Real* point_area, const Real* node_rest, const Real* u_prev, const Real* v_prev,
                                   const Real* ground_planes, const Real* friction, const Real* contact_force,
                                   Real* point_force, Real* point_damping) {
   GroundPlane<Real> planes[kMaxGroundPlanes];
   const int plane_count = load_ground_planes(ground_planes, cx.n_plane, planes);
   Vec3<Real> x, v;
-  contact_point_state(i, point_nodes, point_t, node_rest, u_prev, v_prev, x, v);
+  contact_point_state(i, point_nodes, point_weights, node_rest, u_prev, v_prev, x, v);
   Vec3<Real> f = contact_force ? load3(contact_force, i) : zero3<Real>();
   Real C[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
   for (int k = 0; k < plane_count; ++k)
@@ -115,16 +115,16 @@ SSC_HD inline void friction_point(int i, const PartContext<Real>& cx, const int*
 
 // C at node i: its contact points' C with the weights (1 - t, t) of the force split.
 template <class Real>
-SSC_HD inline void friction_damping_node(int i, const PartContext<Real>&, const Real* point_damping, const Real* point_t,
+SSC_HD inline void friction_damping_node(int i, const PartContext<Real>&, const Real* point_damping, const Real* point_weights,
                                          const int* node_point_offset, const int* node_point_entry, Real* damping) {
-  gather_point_sym3(point_damping, point_t, node_point_offset, node_point_entry, i, damping + 6 * i);
+  gather_point_sym3(point_damping, point_weights, node_point_offset, node_point_entry, i, damping + 6 * i);
 }
 
 // The contact force's cotangent passes through; the point's position and velocity cotangents
-// (gathered to the edge's nodes by the next parts) and its shares of the planes' and the
+// (gathered to the point's corners by the next parts) and its shares of the planes' and the
 // friction values' (laid out like their tensors; summed by reductions).
 template <class Real>
-SSC_HD inline void adj_friction_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_t,
+SSC_HD inline void adj_friction_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_weights,
                                       const Real* point_area, const Real* node_rest, const Real* u_prev,
                                       const Real* v_prev, const Real* ground_planes, const Real* friction,
                                       const Real* point_force_bar, const Real* damping_bar, Real* contact_force_bar,
@@ -132,13 +132,11 @@ SSC_HD inline void adj_friction_point(int i, const PartContext<Real>& cx, const 
   GroundPlane<Real> planes[kMaxGroundPlanes];
   const int plane_count = load_ground_planes(ground_planes, cx.n_plane, planes);
   Vec3<Real> x, v, xb = zero3<Real>(), vb = zero3<Real>();
-  contact_point_state(i, point_nodes, point_t, node_rest, u_prev, v_prev, x, v);
+  contact_point_state(i, point_nodes, point_weights, node_rest, u_prev, v_prev, x, v);
   const Vec3<Real> f_bar = load3(point_force_bar, i);
   if (contact_force_bar) add3(contact_force_bar, i, f_bar);
-  const Real t = point_t[i];
-  const int na = point_nodes[2 * i], nb = point_nodes[2 * i + 1];
   Real C_bar[6];
-  for (int j = 0; j < 6; ++j) C_bar[j] = (Real(1) - t) * damping_bar[6 * na + j] + t * damping_bar[6 * nb + j];
+  point_sym3(i, point_nodes, point_weights, damping_bar, C_bar);
   Real* pb = plane_bar_share + kPlaneValues * cx.n_plane * i;
   Real* fb = friction_bar_share + kFrictionValues * cx.n_plane * i;
   for (int k = 0; k < cx.n_plane; ++k) {
@@ -173,18 +171,18 @@ inline OpSpec friction_spec() {
                {"planebar", Domain::Point, 0, "ground_planes"},
                {"frictionbar", Domain::Point, 0, "friction"}};
   s.forward = {part("friction", Extent::Point, SSC_PART(friction_point),
-                    {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "u_prev^", "v_prev^", "ground_planes",
+                    {"#point_nodes", "#point_weights", "#point_area", "#node_rest^", "u_prev^", "v_prev^", "ground_planes",
                      "friction", "contact_force", "point_force", "$pdamp"}),
                part("friction_damping", Extent::Node, SSC_PART(friction_damping_node),
-                    {"$pdamp^", "#point_t", "#node_point_offset", "#node_point_entry", "damping"})};
+                    {"$pdamp^", "#point_weights", "#node_point_offset", "#node_point_entry", "damping"})};
   s.adjoint = {part("friction", Extent::Point, SSC_ADJOINT_PART(adj_friction_point),
-                    {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "u_prev^", "v_prev^", "ground_planes",
+                    {"#point_nodes", "#point_weights", "#point_area", "#node_rest^", "u_prev^", "v_prev^", "ground_planes",
                      "friction", "d_point_force", "d_damping^", "d_contact_force", "$xbar", "$vbar", "$planebar",
                      "$frictionbar"}),
                part("friction_gather", Extent::Node, SSC_ADJOINT_PART(add_point_sum),
-                    {"$xbar^", "#point_t", "#node_point_offset", "#node_point_entry", "d_u_prev"}),
+                    {"$xbar^", "#point_weights", "#node_point_offset", "#node_point_entry", "d_u_prev"}),
                part("friction_gather", Extent::Node, SSC_ADJOINT_PART(add_point_sum),
-                    {"$vbar^", "#point_t", "#node_point_offset", "#node_point_entry", "d_v_prev"}),
+                    {"$vbar^", "#point_weights", "#node_point_offset", "#node_point_entry", "d_v_prev"}),
                reduction("friction_reduce", {"$planebar", "$frictionbar"}, {"d_ground_planes", "d_friction"})};
   return s;
 }

@@ -82,26 +82,29 @@ SSC_HD inline void line_search_node(int i, const PartContext<Real>&, const Real*
   node_q[i] = q;
 }
 
-// Point i: its share of S (its stiffness at the iterate, lumped to its edge's nodes as the
+// Point i: its share of S (its stiffness at the iterate, lumped to its corners as the
 // solve's) and of each alpha's contact term.
 template <class Real>
-SSC_HD inline void line_search_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_t,
+SSC_HD inline void line_search_point(int i, const PartContext<Real>& cx, const int* point_nodes, const Real* point_weights,
                                      const Real* point_area, const Real* node_rest, const Real* guess,
                                      const Real* u_full, const Real* ground_planes, Real* point_terms) {
   GroundPlane<Real> planes[kMaxGroundPlanes];
   const int plane_count = load_ground_planes(ground_planes, cx.n_plane, planes);
   Vec3<Real> x, x_full, unused;
-  contact_point_state(i, point_nodes, point_t, node_rest, guess, guess, x, unused);
-  contact_point_state(i, point_nodes, point_t, node_rest, u_full, u_full, x_full, unused);
+  contact_point_state(i, point_nodes, point_weights, node_rest, guess, guess, x, unused);
+  contact_point_state(i, point_nodes, point_weights, node_rest, u_full, u_full, x_full, unused);
   const Vec3<Real> d = x_full - x;
   Vec3<Real> f = zero3<Real>();
   Real K[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
   for (int p = 0; p < plane_count; ++p) plane_contact_stiffness(planes[p], point_area[i], x, f, K);
-  const int na = point_nodes[2 * i], nb = point_nodes[2 * i + 1];
-  const Real t = point_t[i];
-  const Vec3<Real> da = load3(u_full, na) - load3(guess, na), db = load3(u_full, nb) - load3(guess, nb);
   Real* out = point_terms + (1 + kLineSearchSteps) * i;
-  out[0] = (Real(1) - t) * dot(da, sym3_apply(K, 0, da)) + t * dot(db, sym3_apply(K, 0, db));
+  out[0] = Real(0);
+  for (int c = kPointNodes * i; c < kPointNodes * (i + 1); ++c) {
+    if (point_weights[c] == Real(0)) continue;
+    const int n = point_nodes[c];
+    const Vec3<Real> dn = load3(u_full, n) - load3(guess, n);
+    out[0] += point_weights[c] * dot(dn, sym3_apply(K, 0, dn));
+  }
   Real alpha = Real(1);
   for (int j = 0; j < kLineSearchSteps; ++j, alpha *= Real(kLineSearchShrink)) {
     const Vec3<Real> fa = contact_force(x + alpha * d, zero3<Real>(), point_area[i], planes, plane_count, Real(0), Real(0));
@@ -154,7 +157,7 @@ inline OpSpec line_search_spec() {
                     {"dt", "theta", "mass_damping", "stiffness_damping", "mass", "fixed", "guess", "u_full", "damping",
                      "$node_q"}),
                part("line_search_points", Extent::Point, SSC_PART(line_search_point),
-                    {"#point_nodes", "#point_t", "#point_area", "#node_rest^", "guess^", "u_full^", "ground_planes",
+                    {"#point_nodes", "#point_weights", "#point_area", "#node_rest^", "guess^", "u_full^", "ground_planes",
                      "$point_terms"}),
                reduction("line_search_reduce", {"$cell_q", "$node_q", "$point_terms"}, {"sums"})};
   return s;

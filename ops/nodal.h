@@ -58,12 +58,12 @@ SSC_HD inline void adj_node_mass_node(int i, const PartContext<Real>&, const Rea
 
 template <class Real>
 SSC_HD inline void node_force_node(int i, const PartContext<Real>&, const Real* corner_force, const int* node_cell_offset,
-                                   const int* node_cell_entry, const Real* point_force, const Real* point_t,
+                                   const int* node_cell_entry, const Real* point_force, const Real* point_weights,
                                    const int* node_point_offset, const int* node_point_entry, const Real* body_force,
                                    const Real* mass, const Real* gravity, Real* force) {
   const Vec3<Real> corners = gather_corner_sum(corner_force, node_cell_offset, node_cell_entry, i);
   Vec3<Real> points =
-      point_force ? gather_point_sum(point_force, point_t, node_point_offset, node_point_entry, i) : zero3<Real>();
+      point_force ? gather_point_sum(point_force, point_weights, node_point_offset, node_point_entry, i) : zero3<Real>();
   if (body_force) points += load3(body_force, i);
   store3(force, i, node_force(mass[i], load3(gravity, 0), corners, points));
 }
@@ -80,13 +80,11 @@ SSC_HD inline void adj_node_force_corners(int i, const PartContext<Real>&, const
   for (int c = 0; c < 8; ++c) add3(corner_force_bar, 8 * i + c, load3(force_bar, cell_nodes[8 * i + c]));
 }
 
-// The contact points' cotangents: (1 - t, t) of their edge nodes' force cotangents.
+// The contact points' cotangents: their corners' force cotangents, weighted.
 template <class Real>
 SSC_HD inline void adj_node_force_points(int i, const PartContext<Real>&, const Real* force_bar, const int* point_nodes,
-                                         const Real* point_t, Real* point_force_bar) {
-  const Real t = point_t[i];
-  add3(point_force_bar, i,
-       (Real(1) - t) * load3(force_bar, point_nodes[2 * i]) + t * load3(force_bar, point_nodes[2 * i + 1]));
+                                         const Real* point_weights, Real* point_force_bar) {
+  add3(point_force_bar, i, point_vec3(i, point_nodes, point_weights, force_bar));
 }
 
 // The mass's cotangent and the node's share of gravity's (double, summed by a reduction).
@@ -119,13 +117,13 @@ inline OpSpec node_force_spec() {
              in("mass"), in("gravity"), out("force")};
   s.scratch = {{"red", Domain::Node, 3, ""}};
   s.forward = {part("node_force", Extent::Node, SSC_PART(node_force_node),
-                    {"corner_force^", "#node_cell_offset", "#node_cell_entry", "point_force^", "#point_t",
+                    {"corner_force^", "#node_cell_offset", "#node_cell_entry", "point_force^", "#point_weights",
                      "#node_point_offset", "#node_point_entry", "body_force", "mass", "gravity", "force"})};
   s.adjoint = {
       part("node_force_corners", Extent::Cell, SSC_ADJOINT_PART(adj_node_force_corners),
            {"d_force^", "#cell_nodes", "d_corner_force"}),
       when_bound(part("node_force_points", Extent::Point, SSC_ADJOINT_PART(adj_node_force_points),
-                      {"d_force^", "#point_nodes", "#point_t", "d_point_force"}),
+                      {"d_force^", "#point_nodes", "#point_weights", "d_point_force"}),
                  "point_force"),
       when_bound(part("node_force_body", Extent::Node, SSC_ADJOINT_PART(adj_node_force_body), {"d_force", "d_body_force"}),
                  "body_force"),

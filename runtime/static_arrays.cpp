@@ -1,7 +1,11 @@
 // The static arrays by name (see static_arrays.h).
 #include "runtime/static_arrays.h"
 
+#include "ops/contact.h"
+
 namespace ssc {
+
+static_assert(kPointNodes == ops::kPointNodes, "the ops read contact points as the grid lays them out");
 
 std::vector<NamedStaticArray> named_static_arrays(const StaticArrays& g) {
   std::vector<NamedStaticArray> a;
@@ -19,15 +23,14 @@ std::vector<NamedStaticArray> named_static_arrays(const StaticArrays& g) {
   ints("node_cell_offset", g.node_cell_offset);
   ints("node_cell_entry", g.node_cell_entry);
   std::vector<int> pn;
-  std::vector<double> pt, pa;
+  std::vector<double> pw, pa;
   for (const ContactPoint& p : g.contact_points) {
-    pn.push_back(p.node_a);
-    pn.push_back(p.node_b);
-    pt.push_back(p.t);
+    pn.insert(pn.end(), p.nodes, p.nodes + kPointNodes);
+    pw.insert(pw.end(), p.weights, p.weights + kPointNodes);
     pa.push_back(p.area);
   }
   ints("point_nodes", pn);
-  reals("point_t", pt);
+  reals("point_weights", pw);
   reals("point_area", pa);
   ints("node_point_offset", g.node_point_offset);
   ints("node_point_entry", g.node_point_entry);

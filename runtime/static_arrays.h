@@ -8,12 +8,22 @@
 
 namespace ssc {
 
-// A point of the rest surface where ground contact is tested: the crossing of the surface
-// with the edge between active nodes a and b.
+// A point of the rest surface where ground contact is tested, anywhere in an active cell: it
+// moves with the cell's trilinear interpolation of its 8 corners (ops/contact.h).
+constexpr int kPointNodes = 8;
 struct ContactPoint {
-  int node_a = 0, node_b = 0;  // active node ids
-  double t = 0;                // position (1 - t) x_a + t x_b
-  double area = 0;             // surface area carried, m^2
+  int nodes[kPointNodes] = {};       // active node ids, the corners of its cell
+  double weights[kPointNodes] = {};  // trilinear weights, summing to 1 (0 for a corner it does not touch)
+  double area = 0;                   // surface area carried, m^2
+
+  // Component k of the point's position from a nodal field (3 per node; rest positions, or
+  // rest positions plus a displacement when `u` is given).
+  double at(const std::vector<double>& node_rest, int k, const double* u = nullptr) const {
+    double x = 0;
+    for (int c = 0; c < kPointNodes; ++c)
+      if (weights[c] != 0) x += weights[c] * (node_rest[3 * size_t(nodes[c]) + k] + (u ? u[3 * size_t(nodes[c]) + k] : 0));
+    return x;
+  }
 };
 
 struct StaticArrays {
@@ -40,7 +50,7 @@ struct StaticArrays {
 
   std::vector<ContactPoint> contact_points;
   std::vector<int> node_point_offset;       // CSR over active nodes ...
-  std::vector<int> node_point_entry;        // ... entries point * 2 + side (0: a, 1: b)
+  std::vector<int> node_point_entry;        // ... entries point * kPointNodes + corner (nonzero weights only)
 
   std::vector<int> band_neighbors;          // 6 per band node: band id >= 0, -(active id) - 2, or -1
   std::vector<int> band_degree;             // active + band neighbours

@@ -177,10 +177,16 @@ void each_forward_kernel(const std::string& real, double tolerance, const std::v
 // scaled to approximate the tangent), each computed to float precision: relative to the small
 // difference, float's error is up to about 1e-7 times the terms' ratio to it (measured 2.2e-2
 // on the torus's random step, 1.1e-4 in the next iteration). Double shows no such loss
-// (below 1e-10); the allowance is for float alone.
+// (below 1e-10); the allowance is for float alone. The float cotangents of the mass and the
+// mass damping after newmark_rhs also sum terms of both signs (measured 6.7e-5 and 9.6e-5 on
+// the plain torus, 1.1e-4 with air drag and material regions, once the contact points moved
+// onto the exact surface); they get 10x.
 double cancellation_allowance(const std::string& real, const std::string& kernels, const std::string& tensor) {
+  if (real != "float") return 1.0;
   const bool correction = kernels.find("neo_hookean_correction") != std::string::npos;
-  return real == "float" && correction && tensor.rfind("u_theta", 0) == 0 ? 1e3 : 1.0;
+  if (correction && tensor.rfind("u_theta", 0) == 0) return 1e3;
+  const bool rhs = kernels.find("newmark_rhs") != std::string::npos;
+  return rhs && (tensor == "mass" || tensor == "mass_damping") ? 10.0 : 1.0;
 }
 
 void each_adjoint_kernel(const std::string& real, double tolerance, const std::vector<std::string>& overrides) {

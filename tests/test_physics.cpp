@@ -523,7 +523,7 @@ ContactState contact_state(const Simulation& sim, const PlaneSpec& plane) {
   const double* u = sim.displacement(0);
   ContactState s;
   for (const ContactPoint& p : g.contact_points) {
-    const Vec3 x = (1 - p.t) * node_position(g, u, p.node_a) + p.t * node_position(g, u, p.node_b);
+    const Vec3 x(p.at(g.node_rest, 0, u), p.at(g.node_rest, 1, u), p.at(g.node_rest, 2, u));
     const double d = plane.normal.dot(x) - plane.height;
     s.min_distance = std::min(s.min_distance, d);
     s.potential += penalty_potential(d, plane.stiffness, p.area, plane.softmin_alpha);

@@ -69,9 +69,7 @@ double penetration(const Simulation& sim) {
   const double* u = sim.displacement(0);
   double deepest = 0;
   for (const ContactPoint& p : g.contact_points) {
-    const double ya = g.node_rest[3 * p.node_a + 1] + u[3 * p.node_a + 1];
-    const double yb = g.node_rest[3 * p.node_b + 1] + u[3 * p.node_b + 1];
-    deepest = std::max(deepest, -((1 - p.t) * ya + p.t * yb));
+    deepest = std::max(deepest, -p.at(g.node_rest, 1, u));
   }
   return deepest;
 }

@@ -269,7 +269,7 @@ TEST(EnergyAudit, ContactPotentialIsTheForcePotential) {
     const double force = -(energy_at(shift + h) - energy_at(shift - h)) / (2 * h);
     double expected = 0;
     for (const ContactPoint& c : grid.contact_points) {
-      const double y = (1 - c.t) * grid.node_rest[3 * c.node_a + 1] + c.t * grid.node_rest[3 * c.node_b + 1];
+      const double y = c.at(grid.node_rest, 1);
       expected += -1e5 * c.area * softmin(y + shift);
     }
     EXPECT_NEAR(force, expected, 1e-5 * std::abs(expected) + 1e-9) << "shift " << shift;

@@ -158,62 +158,88 @@ void build_node_cell_incidence(SimGrid& g) {
   g.region_count = {0};
 }
 
-// The 12 edges of a cell as corner pairs.
-constexpr int kCellEdges[12][2] = {{0, 1}, {2, 3}, {4, 5}, {6, 7}, {0, 2}, {1, 3},
-                                   {4, 6}, {5, 7}, {0, 4}, {1, 5}, {2, 6}, {3, 7}};
-
-// Contact points: where the rest surface crosses a cell edge (phi < 0 at one end, > 0 at the
-// other), and every surface node (phi = 0 after the zero cutoff) of an active cell. A box whose
-// faces lie on grid planes has its surface on nodes: with crossings alone its rims got no point
-// (all their edges lead to surface nodes or out), its base's points stopped a cell short of its
-// edges, and a soft cube sliding with friction tipped over the row before them
-// (docs/diagnosis.md). Each cell's cut surface area is shared equally among its points.
-void build_contact_points(SimGrid& g) {
-  std::map<std::pair<int, int>, int> point_of;  // (a, b) for an edge's crossing, (n, n) for a surface node
+// Contact points (sim_grid.h): each active cell is split into s^3 sub-cells; a point sits where
+// the rest surface crosses a sub-cell edge (phi < 0 at one end, > 0 at the other) and at every
+// lattice node on the surface (|phi| under the zero cutoff). With s = 1 and the grid's own
+// values these are the paper's edge crossings plus the surface nodes: a box whose faces lie on
+// grid planes has its surface on nodes, and with crossings alone its rims got no point and a
+// soft cube sliding with friction tipped over the row before them. Off the grid planes the
+// trilinear zero level bevels every convex edge across a cell, so a box's base has points only
+// out to a cell inside its rims, and the cube tips all the same (docs/diagnosis.md); phi is then
+// the shape's exact distance, on a lattice of s > 1. Each point carries its cell's trilinear
+// weights and an equal share of its cell's cut surface area.
+void build_contact_points(SimGrid& g, const RestSurface& exact, int s, double zero_cutoff) {
+  const SdfGrid& sdf = g.sdf;
+  const long nx = sdf.size.x(), ny = sdf.size.y();
+  const long lx = (nx - 1) * s + 1, ly = (ny - 1) * s + 1;
+  const double cutoff = zero_cutoff * g.h;
+  std::map<std::pair<long, long>, int> point_of;  // lattice node pair of a crossing, (n, n) for a surface node
+  std::vector<double> phi(size_t((s + 1) * (s + 1) * (s + 1)));
   for (int e = 0; e < g.cell_count; ++e) {
-    const auto idx = corner_indices(g.sdf, g.cell_origin[e]);
+    const long o = g.cell_origin[e];
+    const long ci = o % nx, cj = (o / nx) % ny, ck = o / (nx * ny);
+    const auto idx = corner_indices(sdf, o);
+    const Eigen::Vector3d corner0 = sdf.node_position(o);
+    auto local_index = [&](int a, int b, int c) { return size_t((c * (s + 1) + b) * (s + 1) + a); };
+    for (int c = 0; c <= s; ++c)
+      for (int b = 0; b <= s; ++b)
+        for (int a = 0; a <= s; ++a) {
+          const Eigen::Vector3d t(double(a) / s, double(b) / s, double(c) / s);
+          double v = 0;
+          if (exact) {
+            v = exact(corner0 + g.h * t);
+          } else {
+            for (int k = 0; k < 8; ++k)
+              v += sdf.phi[idx[k]] * ((k & 1) ? t.x() : 1 - t.x()) * ((k & 2) ? t.y() : 1 - t.y()) *
+                   ((k & 4) ? t.z() : 1 - t.z());
+          }
+          phi[local_index(a, b, c)] = std::abs(v) < cutoff ? 0.0 : v;
+        }
+    auto lattice_key = [&](const Eigen::Vector3i& q) { return ((ck * s + q.z()) * ly + (cj * s + q.y())) * lx + (ci * s + q.x()); };
     std::vector<int> cell_points;
-    auto add = [&](std::pair<int, int> key, const ContactPoint& p) {
+    auto add = [&](std::pair<long, long> key, const Eigen::Vector3d& t) {
       auto it = point_of.find(key);
       if (it == point_of.end()) {
         it = point_of.emplace(key, int(g.contact_points.size())).first;
+        ContactPoint p;
+        for (int k = 0; k < kPointNodes; ++k) {
+          p.nodes[k] = g.cell_nodes[8 * e + k];
+          p.weights[k] = ((k & 1) ? t.x() : 1 - t.x()) * ((k & 2) ? t.y() : 1 - t.y()) * ((k & 4) ? t.z() : 1 - t.z());
+        }
         g.contact_points.push_back(p);
       }
       if (std::find(cell_points.begin(), cell_points.end(), it->second) == cell_points.end())
         cell_points.push_back(it->second);
     };
-    for (const auto& edge : kCellEdges) {
-      const double pa = g.sdf.phi[idx[edge[0]]], pb = g.sdf.phi[idx[edge[1]]];
-      if (pa == 0 || pb == 0 || (pa < 0) == (pb < 0)) continue;
-      ContactPoint p;
-      p.node_a = g.cell_nodes[8 * e + edge[0]];
-      p.node_b = g.cell_nodes[8 * e + edge[1]];
-      p.t = pa / (pa - pb);
-      add({p.node_a, p.node_b}, p);
-    }
-    for (int c = 0; c < 8; ++c) {
-      if (g.sdf.phi[idx[c]] != 0) continue;
-      ContactPoint p;  // at node_b, node_a (the opposite corner) weighted 0
-      p.node_a = g.cell_nodes[8 * e + (c ^ 7)];
-      p.node_b = g.cell_nodes[8 * e + c];
-      p.t = 1;
-      add({p.node_b, p.node_b}, p);
-    }
+    for (int c = 0; c <= s; ++c)
+      for (int b = 0; b <= s; ++b)
+        for (int a = 0; a <= s; ++a) {
+          const Eigen::Vector3i q(a, b, c);
+          const double pa = phi[local_index(a, b, c)];
+          if (pa == 0) add({lattice_key(q), lattice_key(q)}, q.cast<double>() / s);
+          for (int d = 0; d < 3; ++d) {
+            if (q[d] == s) continue;
+            const Eigen::Vector3i r = q + Eigen::Vector3i::Unit(d);
+            const double pb = phi[local_index(r.x(), r.y(), r.z())];
+            if (pa == 0 || pb == 0 || (pa < 0) == (pb < 0)) continue;
+            Eigen::Vector3d t = q.cast<double>();
+            t[d] += pa / (pa - pb);
+            add({lattice_key(q), lattice_key(r)}, t / s);
+          }
+        }
     for (int p : cell_points) g.contact_points[p].area += g.cell_area[e] / double(cell_points.size());
   }
   std::vector<int> count(g.node_count, 0);
-  for (const auto& p : g.contact_points) {
-    ++count[p.node_a];
-    ++count[p.node_b];
-  }
+  for (const auto& p : g.contact_points)
+    for (int k = 0; k < kPointNodes; ++k)
+      if (p.weights[k] != 0) ++count[p.nodes[k]];
   g.node_point_offset.assign(g.node_count + 1, 0);
   for (int a = 0; a < g.node_count; ++a) g.node_point_offset[a + 1] = g.node_point_offset[a] + count[a];
   g.node_point_entry.resize(g.node_point_offset.back());
   std::vector<int> fill(g.node_point_offset.begin(), g.node_point_offset.end() - 1);
-  for (int p = 0; p < int(g.contact_points.size()); ++p) {
-    g.node_point_entry[fill[g.contact_points[p].node_a]++] = 2 * p;
-    g.node_point_entry[fill[g.contact_points[p].node_b]++] = 2 * p + 1;
-  }
+  for (int p = 0; p < int(g.contact_points.size()); ++p)
+    for (int k = 0; k < kPointNodes; ++k)
+      if (g.contact_points[p].weights[k] != 0) g.node_point_entry[fill[g.contact_points[p].nodes[k]]++] = kPointNodes * p + k;
 }
 
 void build_band(SimGrid& g, int band_width) {
@@ -276,7 +302,7 @@ void build_band(SimGrid& g, int band_width) {
 
 }  // namespace
 
-SimGrid build_sim_grid(SdfGrid sdf, const GridOptions& options, const std::string& source) {
+SimGrid build_sim_grid(SdfGrid sdf, const GridOptions& options, const std::string& source, const RestSurface& exact) {
   SimGrid g;
   g.h = sdf.cell_size;
   g.sdf = std::move(sdf);
@@ -288,7 +314,7 @@ SimGrid build_sim_grid(SdfGrid sdf, const GridOptions& options, const std::strin
                                  source));
   integrate_cells(g, options);
   build_node_cell_incidence(g);
-  build_contact_points(g);
+  build_contact_points(g, exact, exact ? options.contact_subdivisions : 1, options.zero_cutoff);
   build_band(g, options.band_width);
   return g;
 }

@@ -8,11 +8,15 @@
 //    body part of the cell) and surface weights;
 //  - contact points are the crossings of the rest surface with the edges of active cells and
 //    the surface nodes (phi = 0) of active cells, each carrying a share of the cut surface area
-//    (the paper takes the crossings alone, so a box on grid planes had none on its rims).
+//    (the paper takes the crossings alone, so a box on grid planes had none on its rims); where
+//    the shape's exact distance is given, its crossings with a finer lattice in each active cell
+//    instead, so that a box off the grid planes has points out to its rims. A point moves with
+//    its cell's trilinear interpolation.
 // Node<->cell and node<->point incidence lists (fixed order) turn every element-to-node
 // sum into a deterministic gather.
 #pragma once
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -26,7 +30,12 @@ struct GridOptions {
   int band_width = 0;                  // in grid steps; <= 0: whole grid
   int integration_subdivisions = 4;    // per axis, for cut cells
   double min_node_volume = 1e-3;       // floor on every corner weight, in units of h^3/8
+  int contact_subdivisions = 2;        // per axis, for contact points on an exact surface
 };
+
+// The rest body's exact signed distance at a world point (m, negative inside), where the shape
+// has one; empty: the grid's trilinear SDF.
+using RestSurface = std::function<double(const Eigen::Vector3d&)>;
 
 // The model's grid: the engine's arrays (runtime/static_arrays.h) and what the model keeps
 // beside them (the SDF, the scan-order maps, surface weights, volumes).
@@ -52,7 +61,8 @@ struct SimGrid : StaticArrays {
 };
 
 // Builds the grid; throws InputError (naming `source`) if nothing is inside.
-SimGrid build_sim_grid(SdfGrid sdf, const GridOptions& options, const std::string& source);
+SimGrid build_sim_grid(SdfGrid sdf, const GridOptions& options, const std::string& source,
+                       const RestSurface& exact = {});
 
 // Cell containing a rest-pose point and its local coordinates in [0,1]^3, or -1.
 int find_cell(const SimGrid& grid, const Eigen::Vector3d& rest_point, Eigen::Vector3d* local);

@@ -159,7 +159,12 @@ SimGrid build_body_grid(const Scene& scene) {
     mesh = load_mesh(scene.object.path);
     check_mesh_size(scene, mesh);
   }
-  SimGrid grid = build_sim_grid(build_rest_sdf(scene), scene.grid, source);
+  RestSurface exact;  // primitives: their exact distance places the contact points (sim_grid.h)
+  if (scene.object.kind == ObjectSpec::Kind::Primitive) {
+    const Primitive primitive = scene.object.primitive;
+    exact = [primitive](const Eigen::Vector3d& x) { return primitive_sdf(primitive, x); };
+  }
+  SimGrid grid = build_sim_grid(build_rest_sdf(scene), scene.grid, source, exact);
   assign_material_regions(scene, grid);
   double reference = 0;
   if (scene.object.kind == ObjectSpec::Kind::Primitive) reference = primitive_volume(scene.object.primitive);

@@ -72,7 +72,7 @@ std::vector<RestingStart> resting_start_jumps(const SimGrid& grid, const Physica
     c.alpha = plane.softmin_alpha;
     for (const ContactPoint& q : grid.contact_points) {
       Eigen::Vector3d x;
-      for (int a = 0; a < 3; ++a) x[a] = (1 - q.t) * grid.node_rest[3 * q.node_a + a] + q.t * grid.node_rest[3 * q.node_b + a];
+      for (int a = 0; a < 3; ++a) x[a] = q.at(grid.node_rest, a);
       c.distance.push_back(n.dot(x) - plane.height);
       c.area.push_back(q.area);
     }

@@ -71,7 +71,7 @@ std::string initial_penetration(const SimGrid& grid, const PhysicalParameters& p
     double deepest = 0;
     for (const ContactPoint& c : grid.contact_points) {
       Eigen::Vector3d x;
-      for (int a = 0; a < 3; ++a) x[a] = (1 - c.t) * grid.node_rest[3 * c.node_a + a] + c.t * grid.node_rest[3 * c.node_b + a];
+      for (int a = 0; a < 3; ++a) x[a] = c.at(grid.node_rest, a);
       deepest = std::max(deepest, plane.height - n.dot(x));
     }
     if (deepest > allowed)

@@ -214,6 +214,9 @@ void read_grid(const JsonReader& r, Scene& s) {
   s.grid.integration_subdivisions = r.integer("integration_subdivisions", s.grid.integration_subdivisions);
   r.require(s.grid.integration_subdivisions >= 1 && s.grid.integration_subdivisions <= 32, "integration_subdivisions",
             "must be between 1 and 32");
+  s.grid.contact_subdivisions = r.integer("contact_subdivisions", s.grid.contact_subdivisions);
+  r.require(s.grid.contact_subdivisions >= 1 && s.grid.contact_subdivisions <= 8, "contact_subdivisions",
+            "must be between 1 and 8");
   s.grid.min_node_volume = r.non_negative("min_node_volume", r.number("min_node_volume", s.grid.min_node_volume));
   r.reject_unknown_keys();
 }

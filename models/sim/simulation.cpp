@@ -481,9 +481,7 @@ double Simulation::contact_energy(int b) const {
     const Eigen::Vector3d n = plane.normal.normalized();
     for (const ContactPoint& c : grid_.contact_points) {
       double d = -plane.height;
-      for (int a = 0; a < 3; ++a)
-        d += n[a] * ((1 - c.t) * (grid_.node_rest[3 * c.node_a + a] + u[3 * c.node_a + a]) +
-                     c.t * (grid_.node_rest[3 * c.node_b + a] + u[3 * c.node_b + a]));
+      for (int a = 0; a < 3; ++a) d += n[a] * c.at(grid_.node_rest, a, u);
       e += plane.stiffness * c.area * softmin_potential(d, plane.softmin_alpha);
     }
   }

@@ -17,11 +17,11 @@ UnitScales unit_scales(const Scene& scene, const SimGrid& grid) {
   u.time = r.positive("time", r.number("time", 1.0));
   if (r.has("object_size") || r.has("object_mass")) {
     r.require(!r.has("length") && !r.has("mass"), "length", "and mass cannot be combined with object_size/object_mass");
-    // The body's extent from its surface points (the rest surface's crossings of grid edges).
+    // The body's extent from its surface points.
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
     for (const ContactPoint& p : grid.contact_points)
       for (int k = 0; k < 3; ++k) {
-        const double x = (1 - p.t) * grid.node_rest[3 * p.node_a + k] + p.t * grid.node_rest[3 * p.node_b + k];
+        const double x = p.at(grid.node_rest, k);
         lo[k] = std::min(lo[k], x);
         hi[k] = std::max(hi[k], x);
       }
