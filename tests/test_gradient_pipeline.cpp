@@ -435,7 +435,9 @@ TEST(GradientPipeline, ReportsEveryStepOfBothPasses) {
 }
 
 TEST(GradientPipeline, AdjointMatchesCentralDifferencesPerParameter) {
-  check_against_finite_differences(pipeline(), "sphere on tilted ground");
+  // The initial velocity steps are a tenth: the cost has a kink within 1e-5 m/s of the
+  // start's x velocity (the central difference's error there 6.1e-4, at a tenth 2.5e-9).
+  check_against_finite_differences(pipeline(), "sphere on tilted ground", 0.1);
 }
 
 // The sphere observed at every third step only: the steps between run without the band
@@ -548,7 +550,9 @@ TEST(GradientPipeline, LineSearchedContactAdjointMatchesCentralDifferences) {
   }
   std::printf("line search: %d of %d iterations scaled back\n", scaled, iterations);
   ASSERT_GT(scaled, 0) << "the line search never acted: the test could not fail for it";
-  check_against_finite_differences(pl, "sphere, line-searched contact", 0.1);
+  // Every step a tenth: at the default steps a probe crosses a kink (worst 3.7e-3; 9.0e-7 at
+  // a tenth).
+  check_against_finite_differences(pl, "sphere, line-searched contact", 0.1, 0.1);
 }
 
 // The adjoint time-step solves of one step share a residual reference, the largest

@@ -29,7 +29,7 @@ struct GridOptions {
   double zero_cutoff = 0.01;           // in cell sizes
   int band_width = 0;                  // in grid steps; <= 0: whole grid
   int integration_subdivisions = 4;    // per axis, for cut cells
-  double min_node_volume = 1e-3;       // floor on every corner weight, in units of h^3/8
+  double min_node_volume = 0.05;       // floor on every corner weight, in units of h^3/8
   int contact_subdivisions = 2;        // per axis, for contact points on an exact surface
 };
 
