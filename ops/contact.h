@@ -2,8 +2,8 @@
 //
 // Test points sit on the rest-pose surface inside active cells and move with their cell's
 // trilinear interpolation (weights w_c over its 8 corners), each carrying a share A of the
-// surface area. For a plane with
-// unit normal n and height d (signed distance n.x - d), the penalty force magnitude is
+// surface area. For a plane with unit normal n and height d (signed distance n.x - d), the
+// penalty force magnitude is
 //   f_cur = -k A softmin(dist),  fdot = -k A softmin'(dist) (n.v),
 //   f     = theta (f_cur + dt fdot) + (1 - theta) f_cur,
 // the first-order Taylor prediction of the next step's force blended with the theta of
