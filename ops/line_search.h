@@ -82,6 +82,22 @@ SSC_HD inline void line_search_node(int i, const PartContext<Real>&, const Real*
   node_q[i] = q;
 }
 
+// Whether a point is at least kFarFromPlane / alpha from every plane (outside) at both ends
+// of its step; the distance is linear along the step, so on all of it. There its soft-min
+// force and stiffness are below exp(-kFarFromPlane) = 4e-18 of their scale k A / alpha, under
+// double's rounding: its line-search terms are zero (most of a body's points, and most of the
+// line search's work).
+constexpr double kFarFromPlane = 40;
+template <class Real>
+SSC_HD inline bool far_from_every_plane(const GroundPlane<Real>* planes, int plane_count, const Vec3<Real>& a,
+                                        const Vec3<Real>& b) {
+  for (int p = 0; p < plane_count; ++p) {
+    const Real da = dot(planes[p].normal, a) - planes[p].height, db = dot(planes[p].normal, b) - planes[p].height;
+    if ((da < db ? da : db) * planes[p].alpha < Real(kFarFromPlane)) return false;
+  }
+  return true;
+}
+
 // Point i: its share of S (its stiffness at the iterate, lumped to its corners as the
 // solve's) and of each alpha's contact term.
 template <class Real>
@@ -93,11 +109,15 @@ SSC_HD inline void line_search_point(int i, const PartContext<Real>& cx, const i
   Vec3<Real> x, x_full, unused;
   contact_point_state(i, point_nodes, point_weights, node_rest, guess, guess, x, unused);
   contact_point_state(i, point_nodes, point_weights, node_rest, u_full, u_full, x_full, unused);
+  Real* out = point_terms + (1 + kLineSearchSteps) * i;
+  if (far_from_every_plane(planes, plane_count, x, x_full)) {
+    for (int j = 0; j <= kLineSearchSteps; ++j) out[j] = Real(0);
+    return;
+  }
   const Vec3<Real> d = x_full - x;
   Vec3<Real> f = zero3<Real>();
   Real K[6] = {Real(0), Real(0), Real(0), Real(0), Real(0), Real(0)};
   for (int p = 0; p < plane_count; ++p) plane_contact_stiffness(planes[p], point_area[i], x, f, K);
-  Real* out = point_terms + (1 + kLineSearchSteps) * i;
   out[0] = Real(0);
   for (int c = kPointNodes * i; c < kPointNodes * (i + 1); ++c) {
     if (point_weights[c] == Real(0)) continue;
