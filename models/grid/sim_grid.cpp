@@ -10,6 +10,7 @@
 #include <map>
 
 #include "models/grid/cut_cell.h"
+#include "ops/trilinear.h"
 #include "runtime/errors.h"
 
 namespace ssc {
@@ -189,9 +190,9 @@ void build_contact_points(SimGrid& g, const RestSurface& exact, int s, double ze
           if (exact) {
             v = exact(corner0 + g.h * t);
           } else {
-            for (int k = 0; k < 8; ++k)
-              v += sdf.phi[idx[k]] * ((k & 1) ? t.x() : 1 - t.x()) * ((k & 2) ? t.y() : 1 - t.y()) *
-                   ((k & 4) ? t.z() : 1 - t.z());
+            double w[8];
+            ops::trilinear_weights(make_vec3(t.x(), t.y(), t.z()), w);
+            for (int k = 0; k < 8; ++k) v += sdf.phi[idx[k]] * w[k];
           }
           phi[local_index(a, b, c)] = std::abs(v) < cutoff ? 0.0 : v;
         }
@@ -202,10 +203,8 @@ void build_contact_points(SimGrid& g, const RestSurface& exact, int s, double ze
       if (it == point_of.end()) {
         it = point_of.emplace(key, int(g.contact_points.size())).first;
         ContactPoint p;
-        for (int k = 0; k < kPointNodes; ++k) {
-          p.nodes[k] = g.cell_nodes[8 * e + k];
-          p.weights[k] = ((k & 1) ? t.x() : 1 - t.x()) * ((k & 2) ? t.y() : 1 - t.y()) * ((k & 4) ? t.z() : 1 - t.z());
-        }
+        ops::trilinear_weights(make_vec3(t.x(), t.y(), t.z()), p.weights);
+        for (int k = 0; k < kPointNodes; ++k) p.nodes[k] = g.cell_nodes[8 * e + k];
         g.contact_points.push_back(p);
       }
       if (std::find(cell_points.begin(), cell_points.end(), it->second) == cell_points.end())
