@@ -46,6 +46,33 @@ TEST(DiagnosisNaming, AMeasurementCandidateMustGainBeyondTheFinestControl) {
   EXPECT_FALSE(clears_bars(verdict("depth_scale", 0.15, 0.12, 0.0), true, false, o));
 }
 
+// The ssc-made Neo-Hookean cube thrown at 2 m/s (docs/diagnosis.md, step 8): the base predicts
+// the held-out frames to the noise, the Neo-Hookean model fits the bounce the held-in frames saw.
+TEST(DiagnosisNaming, AParameterFreeSwitchCanBeNamedOnTheHeldInFrames) {
+  const DiagnosisOptions o;
+  CandidateVerdict nh = verdict("nonlinear_material", 0.005, -0.042, 0.0);
+  nh.gain_high = 0.053;
+  nh.heldin_gain = 0.324, nh.heldin_gain_low = 0.25, nh.heldin_gain_high = 0.40;
+  EXPECT_FALSE(clears_bars(nh, false, false, o)) << "not a parameter-free switch: the held-out bar alone";
+  nh.parameter_free = true;
+  EXPECT_TRUE(clears_bars(nh, false, false, o));
+  EXPECT_TRUE(heldin_bar_only(nh, false, false, o));
+  EXPECT_FALSE(clears_bars(nh, true, false, o)) << "a measurement is never named on the frames it was fitted to";
+  CandidateVerdict v = nh;
+  v.discretization_heldin_gain = 0.22;
+  EXPECT_FALSE(clears_bars(v, false, false, o)) << "a finer discretization fits the held-in frames as well";
+  v = nh;
+  v.gain = -0.34, v.gain_low = -0.58, v.gain_high = -0.02;
+  EXPECT_FALSE(clears_bars(v, false, false, o)) << "the held-out frames speak against it";
+  v = nh;
+  v.heldin_gain = 0.15, v.heldin_gain_low = 0.10;
+  EXPECT_FALSE(clears_bars(v, false, false, o)) << "below min_gain";
+  v = verdict("nonlinear_material", 0.90, 0.87, 0.0);  // named on the held-out frames: not on the held-in bar alone
+  v.parameter_free = true, v.heldin_gain = 0.70, v.heldin_gain_low = 0.65;
+  EXPECT_TRUE(clears_bars(v, false, false, o));
+  EXPECT_FALSE(heldin_bar_only(v, false, false, o));
+}
+
 TEST(DiagnosisNaming, AMeasurementIsTheCauseBeforeAnyPhysicalCandidate) {
   const std::vector<CandidateVerdict> verdicts = {verdict("two_materials", 0.70, 0.59, 0.364),
                                                   verdict("focal_length", 0.258, 0.214, 0.364),

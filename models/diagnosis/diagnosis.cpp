@@ -310,13 +310,15 @@ std::vector<std::string> implausible_values(const FittedModel& m, double extent)
 // plausibility and its event.
 void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) {
   const DiagnosisOptions& o = c.options;
-  double discretization = 0;
+  double discretization = 0, discretization_heldin = 0;
   const Diagnosis::Control* finest = nullptr;  // the control with the largest gain
   for (Diagnosis::Control& k : d.controls)
     if (!k.fit.failed && !k.fit.frame_costs.empty()) {
       const Gain g = cost_gain(d.base.frame_costs, k.fit.frame_costs, d.heldin_frames, -1, o.bootstrap, o.seed + 57);
       k.gain = g.value, k.gain_low = g.low, k.gain_high = g.high;
       discretization = std::max(discretization, g.value);
+      discretization_heldin = std::max(
+          discretization_heldin, cost_gain(d.base.frame_costs, k.fit.frame_costs, 0, d.heldin_frames, 1, o.seed).value);
       if (!finest || k.gain > finest->gain) finest = &k;
     }
   const size_t most = d.placebos.empty() ? 0 : d.placebos.back().extra.size();
@@ -350,8 +352,12 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
                              : expand_parameter_names(m.extra, PhysicalParameters::from_scene(m.problem.scene)).size();
     const Gain g = cost_gain(d.base.frame_costs, m.frame_costs, d.heldin_frames, -1, o.bootstrap, o.seed + i);
     v.gain = g.value, v.gain_low = g.low, v.gain_high = g.high;
+    const Gain in = cost_gain(d.base.frame_costs, m.frame_costs, 0, d.heldin_frames, o.bootstrap, o.seed + 7 * i);
+    v.heldin_gain = in.value, v.heldin_gain_low = in.low, v.heldin_gain_high = in.high;
     v.placebo_gain = std::max(0.0, placebo_gain(extra));
     v.discretization_gain = discretization;
+    v.discretization_heldin_gain = discretization_heldin;
+    v.parameter_free = extra == 0;
     v.implausible = implausible_values(m, c.extent);
     const bool measurement = row && row->fit == ExtensionRow::Fit::Measurement;
     const bool control_gained = finest && finest->gain > 0;
@@ -370,6 +376,7 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
       }
     }
     v.passes = clears_bars(v, measurement, control_gained, o);
+    v.named_on_heldin = heldin_bar_only(v, measurement, control_gained, o);
     if (v.passes) named.push_back(i);
     v.event_frame = events[i];
     if (!event_failures[i].empty()) v.warnings.push_back("the event's frame was not found: " + event_failures[i]);
@@ -596,10 +603,18 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
   } else {
     const CandidateVerdict& v = d.verdicts[named[0]];
     const FittedModel& m = d.candidates[named[0]];
-    d.lines.push_back(fmt::format("cause: {}. Modelling it removes {} of the held-out residual (90 % interval {} .. {}; "
-                                  "a placebo of as many parameters: {})",
-                                  v.name, percent(v.gain), percent(v.gain_low), percent(v.gain_high),
-                                  percent(v.placebo_gain)));
+    if (v.named_on_heldin)
+      d.lines.push_back(fmt::format(
+          "cause: {}. With no parameter of its own it removes {} of the held-in residual (90 % interval {} .. {}; "
+          "the discretization controls: {}), and {} of the held-out residual (interval {} .. {}): the held-out "
+          "frames cannot tell, the held-in ones can",
+          v.name, percent(v.heldin_gain), percent(v.heldin_gain_low), percent(v.heldin_gain_high),
+          percent(v.discretization_heldin_gain), percent(v.gain), percent(v.gain_low), percent(v.gain_high)));
+    else
+      d.lines.push_back(fmt::format("cause: {}. Modelling it removes {} of the held-out residual (90 % interval {} .. {}; "
+                                    "a placebo of as many parameters: {})",
+                                    v.name, percent(v.gain), percent(v.gain_low), percent(v.gain_high),
+                                    percent(v.placebo_gain)));
     std::string extras;
     for (size_t i = 0; i < m.names.size(); ++i)
       if (!base_values.count(m.names[i]))

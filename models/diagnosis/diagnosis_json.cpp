@@ -50,6 +50,9 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
       c["gain_high"] = v.gain_high;
       c["placebo_gain"] = v.placebo_gain;
       c["discretization_gain"] = v.discretization_gain;
+      c["heldin_gain"] = {v.heldin_gain, v.heldin_gain_low, v.heldin_gain_high};
+      c["discretization_heldin_gain"] = v.discretization_heldin_gain;
+      c["named_on_heldin"] = v.named_on_heldin;
       if (!std::isnan(v.control_gain)) c["control_gain"] = {v.control_gain, v.control_gain_low};
       c["passes"] = v.passes;
       c["extra_parameters"] = named(m, true, &base);

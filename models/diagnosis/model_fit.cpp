@@ -14,6 +14,7 @@
 #include "models/sim/compute_device.h"
 #include "models/sim/extensions.h"
 #include "models/sim/parameters.h"
+#include "runtime/errors.h"
 
 namespace ssc {
 namespace {
@@ -188,32 +189,51 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
     if (spec.adjust) spec.adjust(fm.problem);
     PhysicalParameters held = PhysicalParameters::from_scene(fm.problem.scene);
     for (const auto& [name, value] : spec.fixed) set_parameter(held, name, value);
-    int best = -1;
+    std::vector<size_t> ranked;  // the starts that finished, lowest held-in cost first
     for (size_t s = m * S; s < (m + 1) * S; ++s)
-      if (!r.starts[s].failed && r.starts[s].final.size() > 0 &&
-          (best < 0 || r.starts[s].final_cost < r.starts[size_t(best)].final_cost))
-        best = int(s);
+      if (!r.starts[s].failed && r.starts[s].final.size() > 0) ranked.push_back(s);
+    std::stable_sort(ranked.begin(), ranked.end(),
+                     [&](size_t a, size_t b) { return r.starts[a].final_cost < r.starts[b].final_cost; });
     fm.seconds = batch_seconds;
-    if (best < 0) {
-      fm.failed = true;
-      fm.failure = r.starts[m * S].failure.empty() ? "no start" : r.starts[m * S].failure;
-      return;
-    }
-    const StartRecord& start = r.starts[size_t(best)];
-    fm.values.resize(Eigen::Index(fm.names.size()));
-    for (size_t i = 0; i < fm.names.size(); ++i) fm.values[Eigen::Index(i)] = start.final[index_of(fm.names[i])];
-    fm.stop_reason = start.stop_reason;
     for (size_t s = m * S; s < (m + 1) * S; ++s) {
       fm.converged_starts += stopped_converged(r.starts[s].stop_reason);
       fm.per_start.push_back({r.starts[s].stop_reason, r.starts[s].iterations, r.starts[s].cost_history});
     }
     fm.starts = int(S);
-    if (start.stop_reason == "iteration limit")
-      fm.note = fmt::format("the fit stopped at the iteration limit ({} iterations)", o.iterations);
-    for (size_t i = 0; i < fm.names.size(); ++i) set_parameter(held, fm.names[i], fm.values[Eigen::Index(i)]);
-    fm.frame_costs = per_frame_costs(fm.problem, held, device);
-    for (size_t f = 0; f < fm.frame_costs.size(); ++f)
-      (int(f) < c.heldin ? fm.heldin_cost : fm.heldout_cost) += fm.frame_costs[f];
+    // The fit is the best start whose parameters also simulate the frames held out: a start
+    // can fit the held-in frames and then blow up after them (a soft body's spin, say).
+    std::string blew_up;
+    int tried = 0;
+    for (size_t s : ranked) {
+      const StartRecord& start = r.starts[s];
+      fm.values.resize(Eigen::Index(fm.names.size()));
+      for (size_t i = 0; i < fm.names.size(); ++i) fm.values[Eigen::Index(i)] = start.final[index_of(fm.names[i])];
+      PhysicalParameters at = held;
+      for (size_t i = 0; i < fm.names.size(); ++i) set_parameter(at, fm.names[i], fm.values[Eigen::Index(i)]);
+      ++tried;
+      try {
+        fm.frame_costs = per_frame_costs(fm.problem, at, device);
+      } catch (const SimulationError& e) {
+        if (blew_up.empty()) blew_up = e.what();
+        continue;
+      }
+      fm.stop_reason = start.stop_reason;
+      if (start.stop_reason == "iteration limit")
+        fm.note = fmt::format("the fit stopped at the iteration limit ({} iterations)", o.iterations);
+      if (tried > 1)
+        fm.note += fmt::format("{}the {} start(s) with a lower held-in cost failed on the frames held out ({}); the "
+                               "next best is the fit",
+                               fm.note.empty() ? "" : "; ", tried - 1, blew_up);
+      for (size_t f = 0; f < fm.frame_costs.size(); ++f)
+        (int(f) < c.heldin ? fm.heldin_cost : fm.heldout_cost) += fm.frame_costs[f];
+      return;
+    }
+    fm.failed = true;
+    fm.values.resize(0);
+    if (!blew_up.empty())
+      fm.failure = "every start's fit failed on the frames held out: " + blew_up;
+    else
+      fm.failure = r.starts[m * S].failure.empty() ? "no start" : r.starts[m * S].failure;
   };
   side_by_side(specs.size(), o.device, evaluate);
   if (shared_problem) *shared_problem = std::move(shared);

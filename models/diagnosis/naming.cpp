@@ -13,13 +13,26 @@ bool is_measurement(const std::string& name) {
   return row && row->fit == ExtensionRow::Fit::Measurement;
 }
 
-}  // namespace
-
-bool clears_bars(const CandidateVerdict& v, bool measurement, bool control_gained, const DiagnosisOptions& o) {
+bool clears_heldout_bars(const CandidateVerdict& v, bool measurement, bool control_gained, const DiagnosisOptions& o) {
   const bool over_placebo = v.gain >= o.min_gain && v.gain_low > v.placebo_gain + o.margin && v.implausible.empty();
   if (measurement && control_gained)  // NaN (not laid onto the control) fails
     return over_placebo && v.control_gain >= o.min_gain && v.control_gain_low > v.placebo_gain + o.margin;
   return over_placebo && v.gain_low > v.discretization_gain + o.margin;
+}
+
+bool clears_heldin_bar(const CandidateVerdict& v, bool measurement, const DiagnosisOptions& o) {
+  return !measurement && v.parameter_free && v.implausible.empty() && v.heldin_gain >= o.min_gain &&
+         v.heldin_gain_low > std::max(0.0, v.discretization_heldin_gain) + o.margin && v.gain_high >= 0;
+}
+
+}  // namespace
+
+bool clears_bars(const CandidateVerdict& v, bool measurement, bool control_gained, const DiagnosisOptions& o) {
+  return clears_heldout_bars(v, measurement, control_gained, o) || clears_heldin_bar(v, measurement, o);
+}
+
+bool heldin_bar_only(const CandidateVerdict& v, bool measurement, bool control_gained, const DiagnosisOptions& o) {
+  return !clears_heldout_bars(v, measurement, control_gained, o) && clears_heldin_bar(v, measurement, o);
 }
 
 void order_named(std::vector<size_t>& named, const std::vector<CandidateVerdict>& verdicts,

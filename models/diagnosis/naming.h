@@ -20,6 +20,14 @@ struct CandidateVerdict {
   // fit, laid onto that fit's motion (NaN where there is no control).
   double control_gain = std::numeric_limits<double>::quiet_NaN(), control_gain_low = std::numeric_limits<double>::quiet_NaN();
   double score = std::numeric_limits<double>::quiet_NaN();  // predicted relative held-in decrease
+  // The same on the held-in frames (the base's held-in cost removed), and the discretization
+  // controls' largest held-in gain. A switch of the model with no parameter of its own
+  // (`parameter_free`: the Neo-Hookean material) can be named on them (clears_bars).
+  double heldin_gain = std::numeric_limits<double>::quiet_NaN(), heldin_gain_low = std::numeric_limits<double>::quiet_NaN(),
+         heldin_gain_high = std::numeric_limits<double>::quiet_NaN();
+  double discretization_heldin_gain = 0;
+  bool parameter_free = false;
+  bool named_on_heldin = false;  // set by clears_bars' caller where only the held-in bar was cleared
   bool passes = false;
   // The frames after the event the extension is about (the first contact with any plane; with
   // the added plane for second_plane; frame 0 for air drag), held-in part: the fraction of the
@@ -38,8 +46,14 @@ struct CandidateVerdict {
 // placebo's gain and the discretization controls' by margin. A measurement candidate: the
 // same over its placebo and, instead of the controls' gain, its gain over the finest
 // control's fit (CandidateVerdict::control_gain) where that control gained; inside every
-// plausible range either way.
+// plausible range either way. A parameter-free physical candidate also passes on the held-in
+// frames: its held-in gain at least min_gain, its interval's lower end above the controls'
+// held-in gain by margin, and its held-out interval reaching 0 or above (`heldin_bar_only`).
+// With no parameter to fit the noise with, its held-in gain is evidence as a held-out one is;
+// where the base already predicts the held-out frames to the noise, they cannot tell.
 bool clears_bars(const CandidateVerdict& v, bool measurement, bool control_gained, const DiagnosisOptions& o);
+// Whether it passes on the held-in bar alone (for the printed lines).
+bool heldin_bar_only(const CandidateVerdict& v, bool measurement, bool control_gained, const DiagnosisOptions& o);
 
 // The named candidates (indices into verdicts) as the cause is taken from them: measurement
 // candidates first, then by gain. With a measurement first, the physical ones were fitted to
