@@ -478,8 +478,7 @@ void find_undecided(Diagnosis& d, const DiagnosisContext& c) {
     const FittedModel& m = d.candidates[i];
     const CandidateVerdict& v = d.verdicts[i];
     if (m.failed) continue;
-    const Gain in = cost_gain(d.base.frame_costs, m.frame_costs, 0, d.heldin_frames, o.bootstrap, o.seed + 7 * i);
-    if (!even(in) || !even({v.gain, v.gain_low, v.gain_high})) continue;
+    if (!even({v.heldin_gain, v.heldin_gain_low, v.heldin_gain_high}) || !even({v.gain, v.gain_low, v.gain_high})) continue;
     for (const auto& [name, before, after] : moved_base(d.base, m))
       d.undecided.emplace_back(m.name, fmt::format("{} {} with the base model, {} with {}", name, with_unit(name, before),
                                                    with_unit(name, after), m.name));
