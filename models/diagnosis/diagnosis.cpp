@@ -358,6 +358,7 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
     v.discretization_gain = discretization;
     v.discretization_heldin_gain = discretization_heldin;
     v.parameter_free = extra == 0;
+    v.degrees_of_freedom = int(extra) + (row ? row->searched_degrees_of_freedom : 0);
     v.implausible = implausible_values(m, c.extent);
     const bool measurement = row && row->fit == ExtensionRow::Fit::Measurement;
     const bool control_gained = finest && finest->gain > 0;
@@ -390,7 +391,6 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
     }
   }
   order_named(named, d.verdicts, &d.unjudged);
-  if (!named.empty()) d.cause = d.verdicts[named[0]].name;
   for (size_t a = 0; a < named.size(); ++a)
     for (size_t b = a + 1; b < named.size(); ++b) {
       // Indistinguishable: the gain of one over the other has an interval containing 0.
@@ -398,6 +398,17 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
                                   d.heldin_frames, -1, o.bootstrap, o.seed + 99);
       if (diff.low <= 0) d.confounded.push_back({d.verdicts[named[a]].name, d.verdicts[named[b]].name});
     }
+  if (!named.empty()) {
+    const size_t first = named[0];
+    if (prefer_the_simplest(named, d.verdicts, d.confounded))
+      d.simpler_than = fmt::format(
+          "{} and {} predict the held-out frames alike ({} and {}); named {}, the simpler ({} degrees of freedom "
+          "against {})",
+          d.verdicts[named[0]].name, d.verdicts[first].name, percent(d.verdicts[named[0]].gain),
+          percent(d.verdicts[first].gain), d.verdicts[named[0]].name, d.verdicts[named[0]].degrees_of_freedom,
+          d.verdicts[first].degrees_of_freedom);
+    d.cause = d.verdicts[named[0]].name;
+  }
 }
 
 // The base parameters a candidate's fit moves by more than kBaseChange: (name, base, after).
@@ -628,6 +639,7 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
       d.lines.push_back(fmt::format("{}; with it corrected: {}", row->tell(m.values[m.values.size() - 1]), corrected));
     }
     if (!m.proposal.empty()) d.lines.push_back("proposed from the data: " + m.proposal);
+    if (!d.simpler_than.empty()) d.lines.push_back(d.simpler_than);
     if (!d.unjudged.empty())
       d.lines.push_back(fmt::format("{} also passed, fitted to the frames as recorded: correct the recording and "
                                     "diagnose again to judge {}",

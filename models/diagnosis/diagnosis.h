@@ -82,6 +82,9 @@ struct Diagnosis {
   // recorded, they are judged once the recording is corrected.
   std::vector<std::string> unjudged;
   std::vector<std::pair<std::string, std::string>> confounded;
+  // Where the cause is a simpler candidate the data cannot tell from the one with the largest
+  // gain: the line that says so (empty otherwise).
+  std::string simpler_than;
   ParameterCorrelation identifiability;  // at the cause's fit (empty names: not assessed)
   // Pairs of parameters whose correlation there is at least 0.95 in size, with it.
   std::vector<std::tuple<std::string, std::string, double>> indistinguishable;

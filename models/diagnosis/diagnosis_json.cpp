@@ -124,6 +124,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   j["undecided"] = nlohmann::json::array();
   for (const auto& [candidate, what] : d.undecided) j["undecided"].push_back({{"candidate", candidate}, {"base", what}});
   j["unjudged"] = d.unjudged;
+  if (!d.simpler_than.empty()) j["simpler_than"] = d.simpler_than;
   j["confounded"] = nlohmann::json::array();
   for (const auto& [a, b] : d.confounded) j["confounded"].push_back({a, b});
   nlohmann::json id;

@@ -47,4 +47,23 @@ void order_named(std::vector<size_t>& named, const std::vector<CandidateVerdict>
       if (!is_measurement(verdicts[k].name)) unjudged->push_back(verdicts[k].name);
 }
 
+bool prefer_the_simplest(std::vector<size_t>& named, const std::vector<CandidateVerdict>& verdicts,
+                         const std::vector<std::pair<std::string, std::string>>& confounded) {
+  if (named.size() < 2 || is_measurement(verdicts[named[0]].name)) return false;
+  const std::string& first = verdicts[named[0]].name;
+  auto alike = [&](const std::string& other) {
+    return std::any_of(confounded.begin(), confounded.end(), [&](const auto& p) {
+      return (p.first == first && p.second == other) || (p.first == other && p.second == first);
+    });
+  };
+  size_t best = 0;
+  for (size_t k = 1; k < named.size(); ++k)
+    if (alike(verdicts[named[k]].name) &&
+        verdicts[named[k]].degrees_of_freedom < verdicts[named[best]].degrees_of_freedom)
+      best = k;
+  if (best == 0) return false;
+  std::rotate(named.begin(), named.begin() + std::ptrdiff_t(best), named.begin() + std::ptrdiff_t(best) + 1);
+  return true;
+}
+
 }  // namespace ssc

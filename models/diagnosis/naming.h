@@ -4,6 +4,7 @@
 #pragma once
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "models/diagnosis/fitted_model.h"
@@ -27,6 +28,7 @@ struct CandidateVerdict {
          heldin_gain_high = std::numeric_limits<double>::quiet_NaN();
   double discretization_heldin_gain = 0;
   bool parameter_free = false;
+  int degrees_of_freedom = 0;  // its fitted parameters and those its proposal searched
   bool named_on_heldin = false;  // set by clears_bars' caller where only the held-in bar was cleared
   bool passes = false;
   // The frames after the event the extension is about (the first contact with any plane; with
@@ -60,5 +62,11 @@ bool heldin_bar_only(const CandidateVerdict& v, bool measurement, bool control_g
 // uncorrected frames: returned in *unjudged.
 void order_named(std::vector<size_t>& named, const std::vector<CandidateVerdict>& verdicts,
                  std::vector<std::string>* unjudged);
+
+// Among the named candidates the data cannot tell from the first (a `confounded` pair with
+// it), the one with the fewest degrees of freedom, the first on a tie, is moved to the front
+// of `named`: the simpler of two models that predict alike. Returns whether the first changed.
+bool prefer_the_simplest(std::vector<size_t>& named, const std::vector<CandidateVerdict>& verdicts,
+                         const std::vector<std::pair<std::string, std::string>>& confounded);
 
 }  // namespace ssc

@@ -69,6 +69,7 @@ std::vector<ExtensionRow> make_table() {
   two_materials.ops = {"stiffness_field"};
   two_materials.scene_keys = {"material.regions"};
   two_materials.fit = ExtensionRow::Fit::ProposedRegion;
+  two_materials.searched_degrees_of_freedom = 3;
   two_materials.parameters = [](const Scene&) {
     return std::vector<std::string>{"material.regions[0].youngs_modulus"};
   };

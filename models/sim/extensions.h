@@ -39,6 +39,10 @@ struct ExtensionRow {
   std::function<std::vector<std::string>(const Scene&)> parameters;
   double off_value = 0;  // Fit::OffValue: the value of each parameter that turns it off
   bool one_sided = false;  // cannot go below its off value (a coefficient, a density)
+  // Degrees of freedom chosen by a search on the held-in frames besides its fitted parameters
+  // (two_materials: the interface's normal and offset, 3). Counted with them where models the
+  // data cannot tell apart are told apart by their size (models/diagnosis/naming.h).
+  int searched_degrees_of_freedom = 0;
   // Typical amount (the score test's probe, the identifiability's step at off) and the range
   // starts are drawn from, for a body of this extent (m).
   std::function<double(double extent)> typical;
