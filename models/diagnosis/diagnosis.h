@@ -22,13 +22,16 @@
 // beats by `margin` both its placebo's gain and the discretization controls' (the base model
 // on half the cell size and on half the time step: what the model's own discretization
 // explains), and its fit stays inside every plausible range (a fit
-// at a range's end needs a value no physical object has: reported, not named). A measurement
+// at a range's end needs a value no physical object has: reported, not named); a switch of the
+// model with no parameter of its own can instead clear the same bars on the held-in frames,
+// where the held-out ones do not speak against it (naming.h). A measurement
 // candidate stands for nothing the discretization could: instead of the controls' gain, its
 // correction laid onto the finest control's fit must gain as much over that fit. The cause is
 // a named measurement candidate if there is one (a physical candidate that passed beside it
 // was fitted to uncorrected frames: reported as unjudged), else the named candidate with the
 // largest gain, or "none". Two named candidates whose gains differ
-// by less than their difference's interval are reported as confounded. A candidate that fits
+// by less than their difference's interval are reported as confounded, and of such a pair
+// with the first the one with fewer degrees of freedom is the cause. A candidate that fits
 // the held-in and the held-out frames as well as the base (both gains' intervals contain 0)
 // while it moves a base parameter is reported as undecided: these data cannot tell the two
 // models apart, and the base parameter depends on which is right. A physical cause is refitted
