@@ -154,6 +154,68 @@ void finish_start(StartRecord& rec, const StartSpace& space, int iterations, con
   rec.final_cost = best_cost;
 }
 
+// A convergence claim of `lm` on a rough cost: the contact set and the line search's step choice
+// make the cost jump on the scale of the forward-difference step, the Jacobian then misses a
+// fall that the exact gradient sees, and the damping shrinks the step to nothing (the CalculiX
+// friction cube, docs/diagnosis.md). Each start that claims convergence is probed kStallProbe
+// (in the optimiser's coordinates) down its exact (adjoint) gradient; a cost lower there by
+// more than kStallDrop of its own is a stall, not a minimum: the start ends at the probe, and
+// its stop reason says so.
+constexpr double kStallProbe = 0.05;
+constexpr double kStallDrop = 0.01;
+
+void check_convergence_claims(const PhysicalParameters& base,
+                              const SurfaceConstraintCost& cost, BatchSimulations& sims,
+                              const std::vector<StartSpace>& spaces, ReconstructionResult& result,
+                              std::vector<LevenbergMarquardt>& lm, std::vector<std::string>& reasons,
+                              std::vector<Eigen::VectorXd>& points, std::vector<double>& costs) {
+  std::vector<int> claimed;
+  std::vector<Eigen::VectorXd> at;
+  for (int s = 0; s < int(lm.size()); ++s)
+    if (lm[s].converged() && lm[s].best_point().size() > 0 && !result.starts[s].cost_history.empty()) {
+      claimed.push_back(s);
+      at.push_back(spaces[s].to_physical(lm[s].best_point()));
+    }
+  if (claimed.empty()) return;
+  const std::vector<PointEvaluation> e = evaluate_batch(sims, cost, base, result.names, at, true, nullptr, {});
+  result.evaluations += int(at.size());
+  std::vector<int> probed;
+  std::vector<Eigen::VectorXd> probes, probe_z;
+  for (size_t k = 0; k < claimed.size(); ++k) {
+    if (!e[k].ok) continue;
+    const int s = claimed[k];
+    Eigen::VectorXd g(Eigen::Index(result.names.size()));
+    for (Eigen::Index i = 0; i < g.size(); ++i)
+      g[i] = parameter_gradient(e[k].value.gradient, with_values(base, result.names, at[k]), result.names[size_t(i)]);
+    const Eigen::VectorXd gz = spaces[s].gradient_to_internal(lm[s].best_point(), g);
+    if (!(gz.norm() > 0) || !gz.allFinite()) continue;
+    const Eigen::VectorXd z = lm[s].best_point() - (kStallProbe / gz.norm()) * gz;
+    probed.push_back(s);
+    probe_z.push_back(z);
+    probes.push_back(spaces[s].to_physical(z));
+  }
+  if (probes.empty()) return;
+  const std::vector<PointEvaluation> p = evaluate_batch(sims, cost, base, result.names, probes, false, nullptr, {});
+  result.evaluations += int(probes.size());
+  for (size_t k = 0; k < probed.size(); ++k) {
+    const int s = probed[k];
+    const double before = lm[s].best_cost();
+    if (!p[k].ok || !(p[k].value.cost < (1 - kStallDrop) * before)) continue;
+    reasons[size_t(s)] = fmt::format(
+        "stalled: after '{}', the cost is {:.1f} % lower a step of {:g} down the exact gradient: a rough cost "
+        "whose fall the forward differences missed",
+        lm[s].stop_reason(), 100 * (1 - p[k].value.cost / before), kStallProbe);
+    points[size_t(s)] = probe_z[k];
+    costs[size_t(s)] = p[k].value.cost;
+    StartRecord& rec = result.starts[size_t(s)];
+    rec.frames = p[k].value.frames;
+    rec.matched_points = rec.observed_points = 0;
+    for (const FrameCost& f : rec.frames) rec.matched_points += f.matched, rec.observed_points += f.points;
+    rec.cost_history.push_back(p[k].value.cost);
+    rec.parameter_history.push_back(probes[k]);
+  }
+}
+
 // Levenberg-Marquardt starts (levenberg_marquardt.h): each round, every running start's trial
 // point and its probes, n + 1 points per start, as one batch of forward simulations whose
 // residual vectors are taken at the observed frames.
@@ -209,11 +271,20 @@ void fit_least_squares(const Problem& problem, const ReconstructionOptions& o, c
       if (best >= 0) progress(round + 1, int(active.size()), lm[best].best_cost(), spaces[best].to_physical(lm[best].best_point()));
     }
   }
+  std::vector<std::string> reasons;
+  std::vector<Eigen::VectorXd> finals;
+  std::vector<double> final_costs;
+  for (int s = 0; s < S; ++s) {
+    reasons.push_back(lm[s].stop_reason());
+    finals.push_back(lm[s].best_point());
+    final_costs.push_back(lm[s].best_cost());
+  }
+  check_convergence_claims(base, cost, sims, spaces, result, lm, reasons, finals, final_costs);
   for (int s = 0; s < S; ++s) {
     StartRecord& rec = result.starts[s];
     rec.failed = rec.cost_history.empty();  // its start point could not be evaluated
     if (rec.failed) rec.failure = lm[s].failure().empty() ? lm[s].stop_reason() : lm[s].failure();
-    finish_start(rec, spaces[s], lm[s].iterations(), lm[s].stop_reason(), lm[s].best_point(), lm[s].best_cost());
+    finish_start(rec, spaces[s], lm[s].iterations(), reasons[size_t(s)], finals[size_t(s)], final_costs[size_t(s)]);
   }
 }
 

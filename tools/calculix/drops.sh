@@ -35,6 +35,12 @@ if [ "${1:-}" = "--test-data" ]; then
         mkdir -p "$out/$c"
         cp -r "$tmp/$c/frames" "$tmp/$c/scene.json" "$out/$c/"
     done
+    # the friction slide (mu 0.5) with 6 elements a 0.2 m edge: its scene and surface frames
+    # (CalculixDropsFit.AOneStartFitThatStallsOnARoughCostIsNotCalledConverged)
+    python3 "$here/drops.py" "$tmp/six" --cases friction --elements 6
+    rm -rf "$out/friction_6"
+    mkdir -p "$out/friction_6"
+    cp -r "$tmp/six/friction/frames" "$tmp/six/friction/scene.json" "$out/friction_6/"
     # the two-material cube, whole (0.35 s): scene, surface frames and their render with 1 mm noise
     # (tests/test_calculix_two_materials.cpp)
     python3 "$here/drops.py" "$tmp" --cases two_materials --elements 3
