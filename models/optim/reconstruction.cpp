@@ -159,15 +159,15 @@ void finish_start(StartRecord& rec, const StartSpace& space, int iterations, con
 // fall that the exact gradient sees, and the damping shrinks the step to nothing (the CalculiX
 // friction cube, docs/diagnosis.md). Each start that claims convergence is probed kStallProbe
 // (in the optimiser's coordinates) down its exact (adjoint) gradient; a cost lower there by
-// more than kStallDrop of its own is a stall, not a minimum: the start ends at the probe, and
-// its stop reason says so.
+// more than kStallDrop of its own is a stall, not a minimum: the start ends at the probe (its
+// `final`; the history keeps the accepted iterations only), and its stop reason says so.
 constexpr double kStallProbe = 0.05;
 constexpr double kStallDrop = 0.01;
 
 void check_convergence_claims(const PhysicalParameters& base,
                               const SurfaceConstraintCost& cost, BatchSimulations& sims,
                               const std::vector<StartSpace>& spaces, ReconstructionResult& result,
-                              std::vector<LevenbergMarquardt>& lm, std::vector<std::string>& reasons,
+                              const std::vector<LevenbergMarquardt>& lm, std::vector<std::string>& reasons,
                               std::vector<Eigen::VectorXd>& points, std::vector<double>& costs) {
   std::vector<int> claimed;
   std::vector<Eigen::VectorXd> at;
@@ -211,8 +211,6 @@ void check_convergence_claims(const PhysicalParameters& base,
     rec.frames = p[k].value.frames;
     rec.matched_points = rec.observed_points = 0;
     for (const FrameCost& f : rec.frames) rec.matched_points += f.matched, rec.observed_points += f.points;
-    rec.cost_history.push_back(p[k].value.cost);
-    rec.parameter_history.push_back(probes[k]);
   }
 }
 
