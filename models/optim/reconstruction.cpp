@@ -23,6 +23,15 @@ PhysicalParameters with_values(PhysicalParameters p, const std::vector<std::stri
   return p;
 }
 
+// The cost's gradient by the fitted names at the physical point x.
+Eigen::VectorXd gradient_by_name(const ParameterGradient& g, const PhysicalParameters& base,
+                                 const std::vector<std::string>& names, const Eigen::VectorXd& x) {
+  const PhysicalParameters at = with_values(base, names, x);
+  Eigen::VectorXd out(Eigen::Index(names.size()));
+  for (size_t i = 0; i < names.size(); ++i) out[Eigen::Index(i)] = parameter_gradient(g, at, names[i]);
+  return out;
+}
+
 // The coordinates one start's optimiser moves in: the parameters it fits (all, unless
 // ReconstructionOptions::start_free says otherwise), the rest held at their initial values.
 class StartSpace {
@@ -184,10 +193,8 @@ void check_convergence_claims(const PhysicalParameters& base,
   for (size_t k = 0; k < claimed.size(); ++k) {
     if (!e[k].ok) continue;
     const int s = claimed[k];
-    Eigen::VectorXd g(Eigen::Index(result.names.size()));
-    for (Eigen::Index i = 0; i < g.size(); ++i)
-      g[i] = parameter_gradient(e[k].value.gradient, with_values(base, result.names, at[k]), result.names[size_t(i)]);
-    const Eigen::VectorXd gz = spaces[s].gradient_to_internal(lm[s].best_point(), g);
+    const Eigen::VectorXd gz = spaces[s].gradient_to_internal(
+        lm[s].best_point(), gradient_by_name(e[k].value.gradient, base, result.names, at[k]));
     if (!(gz.norm() > 0) || !gz.allFinite()) continue;
     const Eigen::VectorXd z = lm[s].best_point() - (kStallProbe / gz.norm()) * gz;
     probed.push_back(s);
@@ -399,8 +406,7 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
           continue;
         }
         const CostGradient& value = e[k].value;
-        Eigen::VectorXd g(space.size());
-        for (int i = 0; i < space.size(); ++i) g[i] = parameter_gradient(value.gradient, with_values(base, result.names, points[k]), result.names[i]);
+        const Eigen::VectorXd g = gradient_by_name(value.gradient, base, result.names, points[k]);
         const int before = opt[active[k]]->iterations();
         const Eigen::VectorXd internal_gradient =
             o.finite_differences ? fd_gradient[k] : spaces[active[k]].gradient_to_internal(opt[active[k]]->ask(), g);
