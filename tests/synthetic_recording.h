@@ -104,8 +104,8 @@ inline SyntheticRecording make_synthetic_recording(const std::string& folder, co
   // grid's cells), as a real object is: not the grid's own coarser surface, which a scan
   // registered to it would only approximate.
   const TriangleMesh object_mesh = load_mesh(mesh_file);
-  std::vector<Eigen::Vector3d> rest;
-  for (const Eigen::Vector3d& v : object_mesh.vertices) rest.push_back(scene.object.transform.apply(v));
+  std::vector<Eigen::Vector3d> rest;  // in the grid's frame (its pose places them at the start)
+  for (const Eigen::Vector3d& v : object_mesh.vertices) rest.push_back(grid.pose.rest(scene.object.transform.apply(v)));
   std::vector<std::array<int, 3>> object_triangles;
   for (const Eigen::Vector3i& t : object_mesh.faces) object_triangles.push_back({t.x(), t.y(), t.z()});
   // Each vertex's cell and place in it (a vertex in a cell the grid left out takes its nearest

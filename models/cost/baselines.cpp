@@ -18,7 +18,8 @@ TrueTrajectory simulate_truth(const Scene& scene, const SimGrid& grid, const Phy
   const std::vector<double> zero_band(3 * size_t(grid.band_count), 0.0);
   for (int step : steps) {
     while (sim.steps_taken() < step) sim.step();
-    const double* band = step == 0 ? zero_band.data() : sim.band_displacement(0);
+    const double* band = sim.band_displacement(0);
+    if (!band) band = zero_band.data();
     t.u.emplace_back(sim.displacement(0), sim.displacement(0) + 3 * grid.node_count);
     t.phi.push_back(cost.point_phi(t.sample_points, sim.displacement(0), band));
   }

@@ -130,7 +130,7 @@ std::vector<ModelSpec> plane_proposals(const FittedModel& base, int heldin, int 
   auto clear_of_start = [&](size_t d) {
     double rest = -1e300;
     for (int i = 0; i < p.grid.node_count; ++i)
-      rest = std::max(rest, p.grid.sdf.node_position(p.grid.node_grid[size_t(i)]).dot(directions[d]));
+      rest = std::max(rest, p.grid.node_start(i).dot(directions[d]));
     return rest + 0.5 * p.grid.h < observed_at[d];
   };
   std::vector<size_t> order;
@@ -186,7 +186,7 @@ InterfaceGuess interface_proposal(const FittedModel& gradient_fit, const Problem
   // A gradient that changes the modulus by less than 10 % across the body proposes nothing.
   if (gradient_fit.failed || !(g.norm() * extent > 0.1)) return guess;
   guess.normal = g.normalized();
-  guess.offset = guess.normal.dot(base.grid.rest_center_of_mass);
+  guess.offset = guess.normal.dot(base.grid.start_center_of_mass());
   const auto e = v.find("youngs_modulus");
   const double modulus = e != v.end() ? e->second : base.scene.material.youngs_modulus;
   // Each side's mean modulus under the gradient, about E exp(+-|g| L / 4): the soft side's is

@@ -154,7 +154,7 @@ FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const Diagnosis
                  "to propose";
     else {
       const InterfaceSearch search = search_interface(d.base, guess, c);
-      specs.push_back(interface_spec(search, guess, d.base.problem.grid.rest_center_of_mass));
+      specs.push_back(interface_spec(search, guess, d.base.problem.grid.start_center_of_mass()));
       // One start more: the base's fit with both sides' moduli where the search found them.
       std::map<std::string, double> found = values_by_name(d.base);
       if (found.count("youngs_modulus") && search.best.body_modulus > 0) found["youngs_modulus"] = search.best.body_modulus;

@@ -34,7 +34,7 @@ bool splits_body(const SimGrid& grid, const InterfaceGuess& g) {
   region.offset = g.offset;
   int inside = 0;
   for (int e = 0; e < grid.cell_count; ++e)
-    inside += region.contains(Eigen::Vector3d(grid.cell_center[3 * e], grid.cell_center[3 * e + 1], grid.cell_center[3 * e + 2]));
+    inside += region.contains(grid.cell_start(e));
   return inside > 0 && inside < grid.cell_count;
 }
 
@@ -86,8 +86,8 @@ InterfaceSearch search_interface(const FittedModel& base, const InterfaceGuess& 
   Problem p = two_material_problem(start, c);
   s.heldin_cost = s.start_cost = score(p, base, s.best, c, o, c.options.device);
   s.geometries = 1;
-  // The interface turns about its point nearest to the rest body's centre of mass.
-  const Eigen::Vector3d centre = base.problem.grid.rest_center_of_mass;
+  // The interface turns about its point nearest to the body's centre of mass at the start.
+  const Eigen::Vector3d centre = base.problem.grid.start_center_of_mass();
   for (int round = 0; round < o.rounds; ++round) {
     const double tilt = o.tilt_deg * kPi / 180 / std::pow(2.0, round);
     const double shift = o.shift_fraction * c.extent / std::pow(2.0, round);

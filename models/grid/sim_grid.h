@@ -37,6 +37,20 @@ struct GridOptions {
 // has one; empty: the grid's trilinear SDF.
 using RestSurface = std::function<double(const Eigen::Vector3d&)>;
 
+// Where the rest body starts: the grid is laid in the object's own frame (scene grid.frame
+// "object": its origin and axes), and the object's position and rotation are the body's
+// initial pose, a rigid initial displacement R X + t - X. Rest positions X (node_rest,
+// cell_center, the SDF) are in that frame; what the scene gives in the world at the start
+// (material regions, the stiffness gradient, dirichlet boxes, probe points) is mapped by
+// start / rest.
+struct RestPose {
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+
+  Eigen::Vector3d start(const Eigen::Vector3d& rest) const { return rotation * rest + translation; }
+  Eigen::Vector3d rest(const Eigen::Vector3d& start) const { return rotation.transpose() * (start - translation); }
+};
+
 // The model's grid: the engine's arrays (runtime/static_arrays.h) and what the model keeps
 // beside them (the SDF, the scan-order maps, surface weights, volumes).
 struct SimGrid : StaticArrays {
@@ -56,6 +70,20 @@ struct SimGrid : StaticArrays {
 
   double total_volume = 0;                    // m^3, the body's cut volume (no floor)
   Eigen::Vector3d rest_center_of_mass = Eigen::Vector3d::Zero();
+  RestPose pose;                              // the body's initial pose (identity: the rest pose)
+
+  // A rest point's position at the start, in the world.
+  Eigen::Vector3d start(const Eigen::Vector3d& rest) const { return pose.start(rest); }
+  Eigen::Vector3d node_start(int node) const {
+    return pose.start(Eigen::Vector3d(node_rest[3 * size_t(node)], node_rest[3 * size_t(node) + 1], node_rest[3 * size_t(node) + 2]));
+  }
+  Eigen::Vector3d cell_start(int cell) const {
+    return pose.start(Eigen::Vector3d(cell_center[3 * size_t(cell)], cell_center[3 * size_t(cell) + 1], cell_center[3 * size_t(cell) + 2]));
+  }
+  Eigen::Vector3d start_center_of_mass() const { return pose.start(rest_center_of_mass); }
+  Eigen::Vector3d point_start(const ContactPoint& p) const {
+    return pose.start(Eigen::Vector3d(p.at(node_rest, 0), p.at(node_rest, 1), p.at(node_rest, 2)));
+  }
 
   static int band_ref_of_active(int active) { return -active - 2; }
 };

@@ -22,8 +22,35 @@ static double resolve_cell_size(const Scene& scene, const Eigen::AlignedBox3d& b
   return bounds.sizes().maxCoeff() / resolution;
 }
 
+// A rotated object's grid is laid along its own axes from its own origin; an unrotated one's is
+// the world's (the same axes). A body held by dirichlet boxes keeps the world's: the engine
+// holds fixed nodes at zero displacement.
+static bool grid_in_object_frame(const Scene& scene) {
+  return scene.grid_in_object_frame && scene.object.kind != ObjectSpec::Kind::SdfFile &&
+         scene.object.transform.rotation_deg.norm() != 0 && scene.dirichlet.empty();
+}
+
+RestPose initial_pose(const Scene& scene) {
+  RestPose pose;
+  if (!grid_in_object_frame(scene)) return pose;
+  pose.rotation = scene.object.transform.rotation();
+  pose.translation = scene.object.transform.position;
+  return pose;
+}
+
+// The object as the grid holds it: in its own frame (scaled), its position and rotation left
+// to the initial pose.
+static ObjectSpec object_in_grid_frame(const Scene& scene) {
+  ObjectSpec o = scene.object;
+  if (!grid_in_object_frame(scene)) return o;
+  o.transform.rotation_deg.setZero();
+  o.transform.position.setZero();
+  o.primitive.transform = o.transform;
+  return o;
+}
+
 static SdfGrid build_rest_sdf_unnamed(const Scene& scene) {
-  const ObjectSpec& o = scene.object;
+  const ObjectSpec o = object_in_grid_frame(scene);
   switch (o.kind) {
     case ObjectSpec::Kind::Primitive:
       return sample_primitive(o.primitive, resolve_cell_size(scene, primitive_bounds(o.primitive)), kGridBorderCells);
@@ -118,11 +145,11 @@ void assign_material_regions(const Scene& scene, SimGrid& grid) {
                      (((c >> 2) & 1) ? t.z() : 1 - t.z());
           if (value > 0) continue;
           ++inside;
-          share[size_t(region_of(corner0 + sdf.cell_size * t) + 1)] += 1;
+          share[size_t(region_of(grid.start(corner0 + sdf.cell_size * t)) + 1)] += 1;
         }
     if (inside == 0) {  // a sliver of a cut cell between the samples: its centroid decides
       const Eigen::Vector3d x(grid.cell_center[3 * e], grid.cell_center[3 * e + 1], grid.cell_center[3 * e + 2]);
-      share[size_t(region_of(x) + 1)] = inside = 1;
+      share[size_t(region_of(grid.start(x)) + 1)] = inside = 1;
     }
     for (int k = 0; k < R; ++k) {
       grid.cell_region_share[size_t(R) * e + k] = share[size_t(k) + 1] / inside;
@@ -161,10 +188,17 @@ SimGrid build_body_grid(const Scene& scene) {
   }
   RestSurface exact;  // primitives: their exact distance places the contact points (sim_grid.h)
   if (scene.object.kind == ObjectSpec::Kind::Primitive) {
-    const Primitive primitive = scene.object.primitive;
+    const Primitive primitive = object_in_grid_frame(scene).primitive;
     exact = [primitive](const Eigen::Vector3d& x) { return primitive_sdf(primitive, x); };
   }
   SimGrid grid = build_sim_grid(build_rest_sdf(scene), scene.grid, source, exact);
+  grid.pose = initial_pose(scene);
+  // The stiffness gradient is given in the world: each cell's offset from the centre of mass
+  // as it starts.
+  for (int e = 0; e < grid.cell_count; ++e) {
+    const Eigen::Vector3d o = grid.pose.rotation * Eigen::Vector3d(grid.cell_offset[3 * e], grid.cell_offset[3 * e + 1], grid.cell_offset[3 * e + 2]);
+    for (int k = 0; k < 3; ++k) grid.cell_offset[3 * size_t(e) + k] = o[k];
+  }
   assign_material_regions(scene, grid);
   double reference = 0;
   if (scene.object.kind == ObjectSpec::Kind::Primitive) reference = primitive_volume(scene.object.primitive);

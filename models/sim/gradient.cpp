@@ -199,7 +199,8 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
     for (int i = 0; i < g.node_count; ++i) {
       if (fixed[i]) continue;
       const Eigen::Vector3d vb(v_bar[b][3 * i], v_bar[b][3 * i + 1], v_bar[b][3 * i + 2]);
-      const Eigen::Vector3d r = Eigen::Vector3d(g.node_rest[3 * i], g.node_rest[3 * i + 1], g.node_rest[3 * i + 2]) - sim.spin_center();
+      const Eigen::Vector3d r =
+          g.pose.rotation * (Eigen::Vector3d(g.node_rest[3 * i], g.node_rest[3 * i + 1], g.node_rest[3 * i + 2]) - sim.spin_center());
       pg.linear_velocity += vb;
       pg.angular_velocity += r.cross(vb);
     }

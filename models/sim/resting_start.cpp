@@ -71,8 +71,7 @@ std::vector<RestingStart> resting_start_jumps(const SimGrid& grid, const Physica
     c.stiffness = plane.stiffness;
     c.alpha = plane.softmin_alpha;
     for (const ContactPoint& q : grid.contact_points) {
-      Eigen::Vector3d x;
-      for (int a = 0; a < 3; ++a) x[a] = q.at(grid.node_rest, a);
+      const Eigen::Vector3d x = grid.point_start(q);
       c.distance.push_back(n.dot(x) - plane.height);
       c.area.push_back(q.area);
     }

@@ -70,8 +70,7 @@ std::string initial_penetration(const SimGrid& grid, const PhysicalParameters& p
     const double allowed = 0.25 * grid.h + 1.0 / plane.softmin_alpha;
     double deepest = 0;
     for (const ContactPoint& c : grid.contact_points) {
-      Eigen::Vector3d x;
-      for (int a = 0; a < 3; ++a) x[a] = c.at(grid.node_rest, a);
+      const Eigen::Vector3d x = grid.point_start(c);
       deepest = std::max(deepest, plane.height - n.dot(x));
     }
     if (deepest > allowed)

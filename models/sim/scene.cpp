@@ -208,6 +208,10 @@ void read_grid(const JsonReader& r, Scene& s) {
   }
   if (s.object.kind == ObjectSpec::Kind::SdfFile && s.cell_size != 0)
     r.fail(r.has("cell_size") ? "cell_size" : "resolution", "cannot be set for an sdf_file object: its grid is the file's");
+  const std::string frame = r.string("frame", "world");
+  r.require(frame == "object" || frame == "world", "frame",
+            "must be \"object\" (the grid along the object's own axes) or \"world\" (along the world's)");
+  s.grid_in_object_frame = frame == "object";
   s.grid.band_width = r.integer("band_width", s.grid.band_width);
   s.grid.zero_cutoff = r.non_negative("zero_cutoff", r.number("zero_cutoff", s.grid.zero_cutoff));
   r.require(s.grid.zero_cutoff < 0.5, "zero_cutoff", "must be below 0.5 (it is a fraction of the cell size)");

@@ -90,6 +90,10 @@ struct Scene {
   ObjectSpec object;
   double cell_size = 0;   // metres (from grid.cell_size or grid.resolution)
   GridOptions grid;
+  // grid.frame: "object" lays the grid along the object's own axes (its rotation_deg is the
+  // body's initial pose, models/grid/sim_grid.h RestPose); "world" along the world's, which cuts
+  // a rotated box's faces.
+  bool grid_in_object_frame = false;
   MaterialSpec material;
   Eigen::Vector3d gravity{0, -9.81, 0};
   Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();

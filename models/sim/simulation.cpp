@@ -57,7 +57,7 @@ Simulation::Simulation(const Scene& scene, const SimGrid& grid, int batch, bool 
   backend_ = std::make_unique<InterpreterBackend>(*interpreter_);
   fixed_.assign(grid.node_count, 0);
   for (int i = 0; i < grid.node_count; ++i) {
-    const Eigen::Vector3d x(grid.node_rest[3 * i], grid.node_rest[3 * i + 1], grid.node_rest[3 * i + 2]);
+    const Eigen::Vector3d x = grid.node_start(i);
     for (const DirichletBox& box : scene.dirichlet)
       if ((x.array() >= box.min.array()).all() && (x.array() <= box.max.array()).all()) fixed_[i] = 1;
   }
@@ -156,16 +156,29 @@ void Simulation::reset() {
     double* u = st.data(graph_.u_prev, b);
     double* v = st.data(graph_.v_prev, b);
     const PhysicalParameters& p = params_[b];
+    // The initial pose is a rigid displacement; the spin is about the centre of mass as posed.
+    // (com is in the rest frame; the spin's arm is rotated with the body.)
+    const RestPose& pose = grid_.pose;
     for (int i = 0; i < grid_.node_count; ++i) {
       const Eigen::Vector3d x(grid_.node_rest[3 * i], grid_.node_rest[3 * i + 1], grid_.node_rest[3 * i + 2]);
-      const Eigen::Vector3d vel = fixed_[i] ? Eigen::Vector3d::Zero() : Eigen::Vector3d(p.linear_velocity + p.angular_velocity.cross(x - com));
+      const Eigen::Vector3d u0 = pose.start(x) - x;
+      const Eigen::Vector3d vel =
+          fixed_[i] ? Eigen::Vector3d::Zero() : Eigen::Vector3d(p.linear_velocity + p.angular_velocity.cross(pose.rotation * (x - com)));
       for (int k = 0; k < 3; ++k) {
-        u[3 * i + k] = 0;
+        u[3 * i + k] = u0[k];
         v[3 * i + k] = vel[k];
       }
     }
-    if (graph_.band_guess >= 0) std::fill_n(st.data(graph_.band_guess, b), 3 * grid_.band_count, 0.0);
-    if (graph_.band_u >= 0) std::fill_n(st.data(graph_.band_u, b), 3 * grid_.band_count, 0.0);
+    // The band moves with the body: its extension of a rigid displacement is that displacement.
+    for (int t : {graph_.band_guess, graph_.band_u}) {
+      if (t < 0) continue;
+      double* band = st.data(t, b);
+      for (int j = 0; j < grid_.band_count; ++j) {
+        const Eigen::Vector3d x = grid_.sdf.node_position(grid_.band_grid[size_t(j)]);
+        const Eigen::Vector3d u0 = pose.start(x) - x;
+        for (int k = 0; k < 3; ++k) band[3 * j + k] = u0[k];
+      }
+    }
     if (graph_.v_before >= 0) std::copy_n(v, 3 * grid_.node_count, st.data(graph_.v_before, b));  // no acceleration yet
   }
   steps_ = 0;
@@ -488,12 +501,14 @@ double Simulation::contact_energy(int b) const {
   return e;
 }
 
-Eigen::Vector3d Simulation::probe(int b, const Eigen::Vector3d& rest_point) const {
+Eigen::Vector3d Simulation::probe(int b, const Eigen::Vector3d& start_point) const {
   Eigen::Vector3d local;
+  const Eigen::Vector3d rest_point = grid_.pose.rest(start_point);
   const int cell = find_cell(grid_, rest_point, &local);
   if (cell < 0)
-    throw InputError(fmt::format("probe ({}, {}, {}) is not inside a cell of the body; give a rest-pose point on or in the object",
-                                 rest_point.x(), rest_point.y(), rest_point.z()));
+    throw InputError(fmt::format("probe ({}, {}, {}) is not inside a cell of the body; give a point on or in the object "
+                                 "where it starts",
+                                 start_point.x(), start_point.y(), start_point.z()));
   const double* u = displacement(b);
   Eigen::Vector3d d = Eigen::Vector3d::Zero();
   for (int c = 0; c < 8; ++c) {
@@ -502,7 +517,7 @@ Eigen::Vector3d Simulation::probe(int b, const Eigen::Vector3d& rest_point) cons
     const int n = grid_.cell_nodes[8 * cell + c];
     d += w * Eigen::Vector3d(u[3 * n], u[3 * n + 1], u[3 * n + 2]);
   }
-  return d;
+  return rest_point + d - start_point;
 }
 
 }  // namespace ssc

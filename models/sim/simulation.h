@@ -95,8 +95,9 @@ class Simulation {
   // The run's sanity checks and what they saw (models/sim/run_audit.h).
   const SimulationAudit& audit(int b) const { return audits_[b]; }
   double total_mass() const;  // with batch item 0's density
-  // Displacement of a rest-pose point (trilinear in its cell); InputError outside the body's cells.
-  Eigen::Vector3d probe(int b, const Eigen::Vector3d& rest_point) const;
+  // How far a body point has moved from where it started (a world point at the start; trilinear
+  // in its cell); InputError outside the body's cells.
+  Eigen::Vector3d probe(int b, const Eigen::Vector3d& start_point) const;
 
   // The state of one batch item (what the adjoint stores per step), and its restoration.
   struct State {
