@@ -108,8 +108,8 @@ inline SyntheticRecording make_synthetic_recording(const std::string& folder, co
   for (const Eigen::Vector3d& v : object_mesh.vertices) rest.push_back(grid.pose.rest(scene.object.transform.apply(v)));
   std::vector<std::array<int, 3>> object_triangles;
   for (const Eigen::Vector3i& t : object_mesh.faces) object_triangles.push_back({t.x(), t.y(), t.z()});
-  // Each vertex's cell and place in it (a vertex in a cell the grid left out takes its nearest
-  // placed neighbour's).
+  // Each vertex's cell and place in it (a vertex in a cell the grid left out moves as its
+  // nearest placed neighbour has moved since the start).
   std::vector<int> vertex_cell(rest.size(), -1);
   std::vector<Eigen::Vector3d> vertex_local(rest.size());
   for (size_t i = 0; i < rest.size(); ++i) vertex_cell[i] = find_cell(grid, rest[i], &vertex_local[i]);
@@ -132,7 +132,8 @@ inline SyntheticRecording make_synthetic_recording(const std::string& folder, co
         const int n = grid.cell_nodes[std::size_t(8 * vertex_cell[j] + c)];
         d += w * Eigen::Vector3d(u[3 * n], u[3 * n + 1], u[3 * n + 2]);
       }
-      out[i] = rest[i] + d;
+      // rest + d is where vertex j is now; a stand-in moves by j's motion since the start.
+      out[i] = grid.start(rest[i]) + (rest[j] + d - grid.start(rest[j]));
     }
     return out;
   };

@@ -39,9 +39,9 @@ struct Slid {
   double ccx[2], ssc[2], rigid[2];  // at 0.1 and 0.2 s
 };
 
-Slid slide(const std::string& name, double mu) {
+Slid slide(const std::string& name, double mu, const std::string& frame = "world") {
   Slid out{};
-  const Scene scene = load_scene(case_dir(name) + "/scene.json");
+  const Scene scene = load_scene(case_dir(name) + "/scene.json", {"grid.frame=\"" + frame + "\""});
   const SimGrid grid = build_body_grid(scene);
   Simulation sim(scene, grid);
   const Eigen::Vector3d c0 = sim.center_of_mass(0), x0 = ccx_centroid(name, 0);
@@ -69,14 +69,15 @@ TEST(CalculixFriction, ACubeSpeedingUpOnTheInclineSlidesAsCalculixAndTheRigidBlo
 }
 
 // CalculiX's cube is itself 2.2 mm behind the rigid block at 0.1 s and 0.9 mm ahead at 0.2 s
-// (it rocks); ssc's slows 3 % more than both over 0.2 s (6 mm of 0.215 m: docs/validation.md),
-// and agrees with CalculiX within 0.3 mm at 0.1 s.
+// (it rocks). ssc's, on a grid along its own axes (grid.frame "object"), agrees with CalculiX
+// within 0.4 mm at both; on the world's grid, whose cut cells under its base let it rock
+// forward, it brakes 3 % harder (6 mm short at 0.2 s: docs/validation.md).
 TEST(CalculixFriction, ACubeSlowingDownOnTheInclineSlidesAsCalculixAndTheRigidBlock) {
-  const Slid s = slide("friction", 0.5);
-  for (int k = 0; k < 2; ++k) EXPECT_NEAR(s.ccx[k], s.rigid[k], 2.5e-3) << "CalculiX against the closed form";
-  EXPECT_NEAR(s.ssc[0], s.ccx[0], 1e-3);
-  EXPECT_NEAR(s.ssc[1], s.ccx[1], 7e-3);
-  EXPECT_LT(s.ssc[1], s.rigid[1]) << "the gap is a stronger braking, not a faster slide";
+  const Slid s = slide("friction", 0.5, "object");
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_NEAR(s.ccx[k], s.rigid[k], 2.5e-3) << "CalculiX against the closed form";
+    EXPECT_NEAR(s.ssc[k], s.ccx[k], 1e-3);
+  }
 }
 
 }  // namespace
