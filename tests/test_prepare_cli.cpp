@@ -111,6 +111,7 @@ void write_reference(const SyntheticRecording& r, const std::filesystem::path& p
     plane["height"] = plane["height"].get<double>() + n.dot(t);
     plane["normal"] = json_of(n);
   }
+  scene["grid"].erase("frame");  // the grid as prepare's scene has it (the recording's was the world's)
   std::ofstream(dir / "reference.json") << scene.dump(2);
   ObservationSet clean = read_observations(r.clean_observations);
   clean.cameras[0].camera_to_world = prepared;

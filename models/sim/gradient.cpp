@@ -79,8 +79,7 @@ std::vector<CostGradient> evaluate_trajectory_gradient(Simulation& sim, const st
           seed->u_bar.resize(3 * size_t(g.node_count), 0.0);
           seed->band_bar.resize(3 * size_t(g.band_count), 0.0);
         }
-        const std::vector<double> zero_band(t == 0 ? 3 * size_t(g.band_count) : 0, 0.0);
-        const double* band = t == 0 ? zero_band.data() : sim.band_displacement(b);
+        const double* band = sim.band_displacement(b);  // at t = 0 the start's (the initial pose's, or 0)
         const FrameCost fc = cost(it->second, b, sim.displacement(b), band, seed ? seed->u_bar.data() : nullptr,
                                   seed ? seed->band_bar.data() : nullptr);
         results[b].frames[it->second] = fc;

@@ -62,6 +62,7 @@ Simulation::Simulation(const Scene& scene, const SimGrid& grid, int batch, bool 
       if ((x.array() >= box.min.array()).all() && (x.array() <= box.max.array()).all()) fixed_[i] = 1;
   }
   for (SimulationAudit& a : audits_) a.tolerance = scene.solver.energy_tolerance;
+  pose_band_offset();
   if (const std::string inside = initial_penetration(grid, params_[0]); !inside.empty()) throw InputError(scene.file + ": " + inside);
   for (const RestingStart& r : resting_start_jumps(grid, params_[0], fixed_))
     warn("resting_start", scene.file + ": " + resting_start_message(r, params_[0]));
@@ -138,6 +139,35 @@ double Simulation::total_mass() const {
   return m * params_[0].density;
 }
 
+// The band extension (the Laplacian's, ops/extension.h) carries a translation exactly but not a
+// rotation, so an initial pose's rigid displacement f would bend the band cells from the first
+// extended step on. The band takes f plus the extension of what the body did since instead:
+// f_band + Ext(u - f_active) = Ext(u) + (f_band - Ext(f_active)), the engine's extension plus a
+// constant offset, formed here once by extending f_active.
+void Simulation::pose_band_offset() {
+  const RestPose& pose = grid_.pose;
+  if (graph_.extension_op < 0 || (pose.rotation == Eigen::Matrix3d::Identity() && pose.translation.isZero())) return;
+  TensorStore<double>& st = interpreter_->store();
+  std::vector<double> rigid_band(3 * size_t(grid_.band_count));
+  for (int j = 0; j < grid_.band_count; ++j) {
+    const Eigen::Vector3d x = grid_.sdf.node_position(grid_.band_grid[size_t(j)]);
+    const Eigen::Vector3d f = pose.start(x) - x;
+    for (int k = 0; k < 3; ++k) rigid_band[3 * size_t(j) + k] = f[k];
+  }
+  double* u = st.data(graph_.u, 0);
+  for (int i = 0; i < grid_.node_count; ++i) {
+    const Eigen::Vector3d x(grid_.node_rest[3 * i], grid_.node_rest[3 * i + 1], grid_.node_rest[3 * i + 2]);
+    const Eigen::Vector3d f = pose.start(x) - x;
+    for (int k = 0; k < 3; ++k) u[3 * i + k] = f[k];
+  }
+  std::copy(rigid_band.begin(), rigid_band.end(), st.data(graph_.band_guess, 0));
+  interpreter_->run_op(graph_.extension_op);
+  const double* extended = st.data(graph_.band_u, 0);
+  band_pose_offset_.resize(rigid_band.size());
+  for (size_t k = 0; k < rigid_band.size(); ++k) band_pose_offset_[k] = rigid_band[k] - extended[k];
+  band_posed_.assign(size_t(batch()), std::vector<double>(rigid_band.size()));
+}
+
 void Simulation::reset() {
   device_current_ = false;
   host_stale_ = false;
@@ -169,14 +199,16 @@ void Simulation::reset() {
         v[3 * i + k] = vel[k];
       }
     }
-    // The band moves with the body: its extension of a rigid displacement is that displacement.
+    // The band starts with the body's rigid displacement: what the engine holds is that minus
+    // the pose's offset (band_displacement adds it back).
     for (int t : {graph_.band_guess, graph_.band_u}) {
       if (t < 0) continue;
       double* band = st.data(t, b);
       for (int j = 0; j < grid_.band_count; ++j) {
         const Eigen::Vector3d x = grid_.sdf.node_position(grid_.band_grid[size_t(j)]);
         const Eigen::Vector3d u0 = pose.start(x) - x;
-        for (int k = 0; k < 3; ++k) band[3 * j + k] = u0[k];
+        for (int k = 0; k < 3; ++k)
+          band[3 * j + k] = u0[k] - (band_pose_offset_.empty() ? 0.0 : band_pose_offset_[3 * size_t(j) + k]);
       }
     }
     if (graph_.v_before >= 0) std::copy_n(v, 3 * grid_.node_count, st.data(graph_.v_before, b));  // no acceleration yet
@@ -396,7 +428,12 @@ const double* Simulation::velocity(int b) const {
 const double* Simulation::band_displacement(int b) const {
   require_host_state();
   if (!band_current_) throw std::logic_error("Simulation: the last step ran without the band extension");
-  return graph_.band_u >= 0 ? interpreter_->store().data(graph_.band_guess, b) : nullptr;
+  if (graph_.band_u < 0) return nullptr;
+  const double* band = interpreter_->store().data(graph_.band_guess, b);
+  if (band_pose_offset_.empty()) return band;
+  std::vector<double>& posed = band_posed_[size_t(b)];
+  for (size_t k = 0; k < posed.size(); ++k) posed[k] = band[k] + band_pose_offset_[k];
+  return posed.data();
 }
 
 Eigen::Vector3d Simulation::center_of_mass(int b) const {

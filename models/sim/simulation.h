@@ -72,7 +72,9 @@ class Simulation {
 
   const double* displacement(int b) const;
   const double* velocity(int b) const;
-  const double* band_displacement(int b) const;  // nullptr without extension
+  // nullptr without extension. With an initial pose (grid.frame "object") the engine extends the
+  // displacement as ever and this adds band_pose_offset_ (simulation.cpp, pose_band_offset).
+  const double* band_displacement(int b) const;
   const std::vector<char>& fixed_nodes() const { return fixed_; }
 
   Eigen::Vector3d center_of_mass(int b) const;
@@ -164,7 +166,10 @@ class Simulation {
   std::vector<char> fixed_;
   double dt_, theta_;
   int steps_ = 0;
+  void pose_band_offset();
   Eigen::Vector3d spin_center_ = Eigen::Vector3d::Zero();
+  std::vector<double> band_pose_offset_;                  // empty without an initial pose
+  mutable std::vector<std::vector<double>> band_posed_;   // per batch item, band_displacement's
 };
 
 }  // namespace ssc

@@ -45,8 +45,7 @@ std::vector<std::string> write_fit_renders(const OutputDir& out, const Problem& 
   for (int f : picks) {
     const ObservedFrame& frame = problem.frames[f];
     while (sim.steps_taken() < frame.step) sim.step();
-    const std::vector<double> zero_band(3 * size_t(problem.grid.band_count), 0.0);
-    const double* band = frame.step == 0 ? zero_band.data() : sim.band_displacement(0);
+    const double* band = sim.band_displacement(0);
     const std::vector<double> phi = cost.point_phi(frame.points, sim.displacement(0), band);
     const std::vector<Eigen::Vector3d> verts = surface.positions(sim.displacement(0));
     std::string svg = fmt::format(
