@@ -16,8 +16,8 @@ constexpr double kVolumeLossWarning = 0.05, kVolumeLossError = 0.5;
 // A mesh body at least this many metres across is likely in millimetres: a warning.
 constexpr double kMillimetreMeshExtent = 10.0;
 
-// The body's initial pose (sim_grid.h): the object's rotation about its position when the grid
-// is in the object's frame, else the identity.
+// The body's initial pose (sim_grid.h): the object's rotation and position when the grid is in
+// the object's frame, else the identity.
 RestPose initial_pose(const Scene& scene);
 // The rest SDF in the grid's frame.
 SdfGrid build_rest_sdf(const Scene& scene);

@@ -90,9 +90,9 @@ struct Scene {
   ObjectSpec object;
   double cell_size = 0;   // metres (from grid.cell_size or grid.resolution)
   GridOptions grid;
-  // grid.frame: "object" lays the grid along the object's own axes (its rotation_deg is the
-  // body's initial pose, models/grid/sim_grid.h RestPose); "world" along the world's, which cuts
-  // a rotated box's faces.
+  // grid.frame: "object" lays a rotated object's grid along its own axes (its position and
+  // rotation_deg are the body's initial pose, models/grid/sim_grid.h RestPose); "world" (the
+  // default) along the world's, which cuts a rotated box's faces.
   bool grid_in_object_frame = false;
   MaterialSpec material;
   Eigen::Vector3d gravity{0, -9.81, 0};
