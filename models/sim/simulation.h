@@ -73,7 +73,8 @@ class Simulation {
   const double* displacement(int b) const;
   const double* velocity(int b) const;
   // nullptr without extension. With an initial pose (grid.frame "object") the engine extends the
-  // displacement as ever and this adds band_pose_offset_ (simulation.cpp, pose_band_offset).
+  // displacement as ever and this adds band_pose_offset_ (simulation.cpp, pose_band_offset) into
+  // a buffer of item b's, valid until the next call for b.
   const double* band_displacement(int b) const;
   const std::vector<char>& fixed_nodes() const { return fixed_; }
 
