@@ -21,6 +21,7 @@
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
 #include "tests/mean_velocity.h"
+#include "tests/turned_cube_slide.h"
 
 namespace ssc {
 namespace {
@@ -231,44 +232,12 @@ TEST(FrictionSlope, CubeOffTheGridPlanesLaunchedOnALevelPlaneStopsAfterTheCoulom
 // On the world's grid (grid.frame "world"); in the cube's own frame its faces lie on grid planes
 // (GridFrame.TheCubeTurnedOntoTheInclineSlidesAsARigidBlock).
 TEST(FrictionSlope, CubeTurnedOffTheGridSlidesDownTheInclineRockingNotTumbling) {
-  std::ifstream in(std::string(SSC_SOURCE_DIR) + "/tests/data/calculix_drops/friction/scene.json");
-  json j = json::parse(in);
-  j.erase("observation");
-  j["grid"]["frame"] = "world";
-  j["time"]["steps"] = 240;  // 0.4 s
-  const double a = -20 * kPi / 180, v0 = 1.2, t_end = 0.4;
-  const Eigen::Vector3d along(std::cos(a), std::sin(a), 0), up(-std::sin(a), std::cos(a), 0);
-  const double deceleration = kG * (0.5 * std::cos(a) - std::sin(-a));
-  for (const double floor : {1e-3, -1.0}) {
-    if (floor > 0)
-      j["grid"]["min_node_volume"] = floor;
-    else
-      j["grid"].erase("min_node_volume");
-    const Scene scene = parse_scene(j, "calculix_friction.json");
-    const SimGrid grid = build_body_grid(scene);
-    Simulation sim(scene, grid);
-    const Eigen::Vector3d c0 = sim.center_of_mass(0), top = c0 + 0.09 * up, bottom = c0 - 0.09 * up;
-    double largest = 0, least_late = 1e9;  // least_late: the smallest tilt in the second half
-    for (int n = 0; n < scene.time.steps; ++n) {
-      sim.step();
-      const Eigen::Vector3d axis = (top + sim.probe(0, top)) - (bottom + sim.probe(0, bottom));
-      const double tilt = std::atan2(axis.dot(along), axis.dot(up)) * 180 / kPi;
-      largest = std::max(largest, tilt);
-      if (2 * n >= scene.time.steps) least_late = std::min(least_late, tilt);
-    }
-    const double slid = (sim.center_of_mass(0) - c0).dot(along);
-    const double expected = v0 * t_end - 0.5 * deceleration * t_end * t_end;
-    std::printf("corner weights floored at %g h^3/8: slid %.4f m in %.1f s (rigid block %.4f m), largest tilt %.1f deg, "
-                "back to %.1f deg in the second half\n",
-                scene.grid.min_node_volume, slid, t_end, expected, largest, least_late);
-    if (floor > 0) {
-      EXPECT_GT(largest, 45.0) << "the floor of 1e-3 no longer tumbles: update this test and docs/diagnosis.md";
-      continue;
-    }
-    EXPECT_LT(largest, 12.0);
-    EXPECT_LT(least_late, 2.0) << "it does not rock back";
-    EXPECT_NEAR(slid, expected, 0.02 * expected);
-  }
+  const TurnedCubeSlide tumbles = turned_cube_slide("world", 1e-3);
+  EXPECT_GT(tumbles.largest, 45.0) << "the floor of 1e-3 no longer tumbles: update this test and docs/diagnosis.md";
+  const TurnedCubeSlide s = turned_cube_slide("world", -1.0);
+  EXPECT_LT(s.largest, 12.0);
+  EXPECT_LT(s.least_late, 2.0) << "it does not rock back";
+  EXPECT_NEAR(s.slid, s.rigid, 0.02 * s.rigid);
 }
 
 }  // namespace

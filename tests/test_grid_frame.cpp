@@ -16,12 +16,13 @@
 #include "models/sim/scene.h"
 #include "models/sim/simulation.h"
 #include "runtime/errors.h"
+#include "tests/turned_cube_slide.h"
 
 namespace ssc {
 namespace {
 
 using json = nlohmann::json;
-constexpr double kPi = 3.14159265358979323846, kG = 9.81;
+constexpr double kPi = 3.14159265358979323846;
 
 // The CalculiX friction slide: a 0.2 m cube turned by -20 degrees about z onto a 20 degree
 // incline, mu 0.5, launched down it at 1.2 m/s; 25 mm cells.
@@ -84,40 +85,14 @@ TEST(GridFrame, ATurnedCubeMovesAsItsTwinInATurnedWorld) {
 }
 
 TEST(GridFrame, TheCubeTurnedOntoTheInclineSlidesAsARigidBlock) {
-  json j = friction_slide();
-  j["grid"]["frame"] = "object";
-  j["time"]["steps"] = 240;  // 0.4 s
-  const double a = -20 * kPi / 180, v0 = 1.2, t_end = 0.4;
-  const Eigen::Vector3d along(std::cos(a), std::sin(a), 0), up(-std::sin(a), std::cos(a), 0);
-  const double deceleration = kG * (0.5 * std::cos(a) - std::sin(-a));
   // Also with the corner weights floored at 1e-3 h^3/8, where the world grid tumbles.
   for (const double floor : {1e-3, -1.0}) {
-    if (floor > 0)
-      j["grid"]["min_node_volume"] = floor;
-    else
-      j["grid"].erase("min_node_volume");
-    const Scene scene = parse_scene(j, "object_frame.json");
-    const SimGrid grid = build_body_grid(scene);
-    Simulation sim(scene, grid);
-    const Eigen::Vector3d c0 = sim.center_of_mass(0), top = c0 + 0.09 * up, bottom = c0 - 0.09 * up;
-    double largest = 0, least_late = 1e9;  // least_late: the smallest tilt in the second half
-    for (int n = 0; n < scene.time.steps; ++n) {
-      sim.step();
-      const Eigen::Vector3d axis = (top + sim.probe(0, top)) - (bottom + sim.probe(0, bottom));
-      const double tilt = std::abs(std::atan2(axis.dot(along), axis.dot(up))) * 180 / kPi;
-      largest = std::max(largest, tilt);
-      if (2 * n >= scene.time.steps) least_late = std::min(least_late, tilt);
-    }
-    const double slid = (sim.center_of_mass(0) - c0).dot(along);
-    const double expected = v0 * t_end - 0.5 * deceleration * t_end * t_end;
-    std::printf("object frame, corner weights floored at %g h^3/8: slid %.4f m in %.1f s (rigid block %.4f m), "
-                "largest tilt %.2f deg, back to %.2f deg in the second half\n",
-                scene.grid.min_node_volume, slid, t_end, expected, largest, least_late);
-    EXPECT_NEAR(slid, expected, 0.02 * expected);
+    const TurnedCubeSlide s = turned_cube_slide("object", floor);
+    EXPECT_NEAR(s.slid, s.rigid, 0.02 * s.rigid);
     // The soft body rocks (6.0 degrees measured at both floors, where the world grid's floor of
     // 1e-3 tumbles past 45) and comes back.
-    EXPECT_LT(largest, 8.0);
-    EXPECT_LT(least_late, 2.0) << "it does not rock back";
+    EXPECT_LT(s.largest, 8.0);
+    EXPECT_LT(s.least_late, 2.0) << "it does not rock back";
   }
 }
 
