@@ -2,6 +2,7 @@
 #include "models/optim/levenberg_marquardt.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -12,6 +13,15 @@ namespace {
 
 constexpr int kMaxRejections = 30;
 constexpr double kMinDamping = 1e-12;
+constexpr double kCurvatureFloor = 1e-6;  // of the largest diagonal of J'J seen
+
+// A matrix over the free axes placed into an n x n one (zero on the held axes).
+Eigen::MatrixXd on_axes(const Eigen::MatrixXd& H, const std::vector<Eigen::Index>& free, Eigen::Index n) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(n, n);
+  for (size_t a = 0; a < free.size(); ++a)
+    for (size_t c = 0; c < free.size(); ++c) out(free[a], free[c]) = H(Eigen::Index(a), Eigen::Index(c));
+  return out;
+}
 
 }  // namespace
 
@@ -73,8 +83,12 @@ void LevenbergMarquardt::tell(const std::vector<ResidualVector>& values, const s
     if (projected_gradient_norm() <= o_.gradient_tolerance) reason_ = "converged: gradient";
   } else if (cost < cost_) {  // rho > 0
     const double before = cost_, predicted = predicted_, rho = (cost_ - cost) / predicted_;
+    choose_model(cost_ - cost);
+    const Eigen::MatrixXd J_before = J_;
+    const Eigen::VectorXd z_before = z_;
     z_ = trial_;
     take(values);
+    update_secant(z_ - z_before, J_before);
     ++iterations_;
     rejections_ = 0;
     accepted_ = true;
@@ -87,6 +101,10 @@ void LevenbergMarquardt::tell(const std::vector<ResidualVector>& values, const s
     else if (iterations_ >= o_.max_iterations)
       reason_ = "iteration limit";
   } else {
+    if (cost < std::numeric_limits<double>::infinity())
+      choose_model(cost_ - cost);
+    else
+      augmented_ = false;  // a failed simulation: back to the Gauss-Newton model
     if (++rejections_ >= kMaxRejections) {
       reason_ = "failed: no decrease after 30 damping increases";
       return;
@@ -114,8 +132,25 @@ void LevenbergMarquardt::take(const std::vector<ResidualVector>& values) {
   scale_ = scale_.cwiseMax(J_.colwise().squaredNorm().transpose());
 }
 
+void LevenbergMarquardt::choose_model(double actual) {
+  augmented_ = o_.lm_secant && std::abs(actual - predicted_augmented_) < std::abs(actual - predicted_gauss_newton_);
+}
+
+void LevenbergMarquardt::update_secant(const Eigen::VectorXd& s, const Eigen::MatrixXd& J_before) {
+  if (S_.rows() != s.size()) S_ = Eigen::MatrixXd::Zero(s.size(), s.size());
+  const double ss = s.squaredNorm();
+  if (!(ss > 0)) return;
+  const Eigen::VectorXd y = (J_ - J_before).transpose() * r_;  // the Hessian's second-order part along s
+  const double sSs = s.dot(S_ * s);
+  if (sSs != 0) S_ *= std::min(1.0, std::abs(s.dot(y)) / std::abs(sSs));  // sizing
+  const Eigen::VectorXd w = y - S_ * s;
+  S_ += (w * s.transpose() + s * w.transpose()) / ss - (w.dot(s) / (ss * ss)) * (s * s.transpose());
+  if (!S_.allFinite()) S_.setZero();
+}
+
 void LevenbergMarquardt::propose() {
   const Eigen::MatrixXd JtJ = J_.transpose() * J_;
+  if (S_.rows() != JtJ.rows()) S_ = Eigen::MatrixXd::Zero(JtJ.rows(), JtJ.cols());
   const double largest = scale_.maxCoeff();
   std::vector<Eigen::Index> free;
   for (Eigen::Index j = 0; j < z_.size(); ++j)
@@ -125,13 +160,24 @@ void LevenbergMarquardt::propose() {
     return;
   }
   const Eigen::Index m = Eigen::Index(free.size());
-  Eigen::MatrixXd A(m, m);
+  Eigen::MatrixXd gauss_newton(m, m), lowering(m, m);
   Eigen::VectorXd b(m);
   for (Eigen::Index a = 0; a < m; ++a) {
     b[a] = -g_[free[size_t(a)]];
-    for (Eigen::Index c = 0; c < m; ++c) A(a, c) = JtJ(free[size_t(a)], free[size_t(c)]);
-    A(a, a) += lambda_ * std::max(scale_[free[size_t(a)]], 1e-12 * largest);
+    for (Eigen::Index c = 0; c < m; ++c) {
+      gauss_newton(a, c) = JtJ(free[size_t(a)], free[size_t(c)]);
+      lowering(a, c) = S_(free[size_t(a)], free[size_t(c)]);
+    }
   }
+  {  // the secant term's negative part only (see the header); the sum's curvature floored
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(lowering);
+    lowering = eigen.eigenvectors() * eigen.eigenvalues().cwiseMin(0.0).asDiagonal() * eigen.eigenvectors().transpose();
+    eigen.compute(gauss_newton + lowering);
+    lowering = eigen.eigenvectors() * eigen.eigenvalues().cwiseMax(kCurvatureFloor * largest).asDiagonal() *
+                   eigen.eigenvectors().transpose() - gauss_newton;
+  }
+  Eigen::MatrixXd A = augmented_ ? Eigen::MatrixXd(gauss_newton + lowering) : gauss_newton;
+  for (Eigen::Index a = 0; a < m; ++a) A(a, a) += lambda_ * std::max(scale_[free[size_t(a)]], 1e-12 * largest);
   const Eigen::VectorXd step = A.ldlt().solve(b);
   Eigen::VectorXd dz = Eigen::VectorXd::Zero(z_.size());
   for (Eigen::Index a = 0; a < m; ++a) dz[free[size_t(a)]] = step[a];
@@ -139,7 +185,9 @@ void LevenbergMarquardt::propose() {
   // long step that lands deep in the flat part; the step keeps its direction but is shortened.
   const double longest = dz.cwiseAbs().maxCoeff();
   if (longest > o_.lm_max_step) dz *= o_.lm_max_step / longest;
-  predicted_ = -(g_.dot(dz) + 0.5 * dz.dot(JtJ * dz));
+  predicted_gauss_newton_ = -(g_.dot(dz) + 0.5 * dz.dot(JtJ * dz));
+  predicted_augmented_ = predicted_gauss_newton_ - 0.5 * dz.dot(on_axes(lowering, free, z_.size()) * dz);
+  predicted_ = augmented_ ? predicted_augmented_ : predicted_gauss_newton_;
   if (!dz.allFinite()) {
     reason_ = "failed: non-finite step";
     return;

@@ -14,6 +14,20 @@
 // and a probe gives that Jacobian entry 0: its residual switched between the robust form and a
 // constant, which has no derivative (surface_residuals.h).
 //
+// Large residuals (a structured secant term, after Dennis, Gay and Welsch's NL2SOL, 1981): the
+// cost's Hessian is J'J + sum_i r_i H_i, and Gauss-Newton keeps J'J alone. Where the model misses
+// the data the second part is large, and where it is negative J'J is too curved: every step
+// falls short, the cost falls by twice what the model predicted (rho about 2, which the damping
+// cannot fix as it can only shorten steps), and a one-parameter fit of ssc's (a homogeneous body
+// fitted to CalculiX's body of two materials) crept by 5 % a step until the iteration limit. So
+// S, an estimate of the second part, is kept by the structured secant update after each
+// accepted step s (y = (J_new - J_old)' r_new, sized by min(1, |s'y| / |s'Ss|), then the
+// symmetric rank-two update that makes S s = y). Only S's negative part is used: a step that is
+// too long is the damping's to shorten. The next step's model is J'J + S- (its curvature floored
+// at 1e-6 of the largest diagonal of J'J) where that model predicted the last step's decrease
+// better than Gauss-Newton's, else J'J alone (NL2SOL's rule); OptimizerOptions::lm_secant = false
+// keeps J'J alone.
+//
 // Stop reasons (stop_reason(); converged() for the first three):
 //   "converged: gradient"                      ||J'r|| <= gradient_tolerance (also at the start)
 //   "converged: relative cost change < tol"    an accepted step's actual and predicted decrease
@@ -89,6 +103,10 @@ class LevenbergMarquardt {
  private:
   void take(const std::vector<ResidualVector>& values);
   void propose();
+  // Which model the next step takes: the one whose predicted decrease was nearer the actual one.
+  void choose_model(double actual);
+  // The structured secant update of S after the accepted step s (J_before: the Jacobian there).
+  void update_secant(const Eigen::VectorXd& s, const Eigen::MatrixXd& J_before);
   // Whether axis j is held at its bound at the current point (see the header comment).
   bool held(Eigen::Index j) const;
   double projected_gradient_norm() const;
@@ -99,8 +117,10 @@ class LevenbergMarquardt {
   double h_;
   Eigen::VectorXd z_, trial_, g_, r_, scale_;
   std::vector<char> matched_, bounded_;
-  Eigen::MatrixXd J_;
+  Eigen::MatrixXd J_, S_;
   double cost_ = 0, predicted_ = 0, lambda_ = 1e-3, nu_ = 2;
+  double predicted_gauss_newton_ = 0, predicted_augmented_ = 0;
+  bool augmented_ = false;
   int iterations_ = 0, rejections_ = 0;
   bool started_ = false, accepted_ = false;
   std::string reason_, failure_;

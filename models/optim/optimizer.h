@@ -27,6 +27,9 @@ struct OptimizerOptions {
   // lm: the cost change test also passes once the step left would move the parameters by less
   // than this many standard errors (see levenberg_marquardt.h); 0 turns that off.
   double lm_standard_errors = 0.1;
+  // lm: lengthen the steps of a large-residual fit with the structured secant term (see
+  // levenberg_marquardt.h); false: Gauss-Newton's model alone.
+  bool lm_secant = true;
   double rprop_initial_step = 0.05;    // in internal units (log space: 5 %)
   double rprop_min_step = 1e-8, rprop_max_step = 1.0;
   double gd_initial_step = 0.05;       // length of the first step in internal units
