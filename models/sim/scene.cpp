@@ -208,7 +208,7 @@ void read_grid(const JsonReader& r, Scene& s) {
   }
   if (s.object.kind == ObjectSpec::Kind::SdfFile && s.cell_size != 0)
     r.fail(r.has("cell_size") ? "cell_size" : "resolution", "cannot be set for an sdf_file object: its grid is the file's");
-  const std::string frame = r.string("frame", "world");
+  const std::string frame = r.string("frame", "object");
   r.require(frame == "object" || frame == "world", "frame",
             "must be \"object\" (the grid along the object's own axes) or \"world\" (along the world's)");
   s.grid_in_object_frame = frame == "object";

@@ -90,10 +90,10 @@ struct Scene {
   ObjectSpec object;
   double cell_size = 0;   // metres (from grid.cell_size or grid.resolution)
   GridOptions grid;
-  // grid.frame: "object" lays a rotated object's grid along its own axes (its position and
-  // rotation_deg are the body's initial pose, models/grid/sim_grid.h RestPose); "world" (the
-  // default) along the world's, which cuts a rotated box's faces.
-  bool grid_in_object_frame = false;
+  // grid.frame: "object" (the default) lays a rotated object's grid along its own axes (its
+  // position and rotation_deg are the body's initial pose, models/grid/sim_grid.h RestPose);
+  // "world" along the world's, which cuts a rotated box's faces.
+  bool grid_in_object_frame = true;
   MaterialSpec material;
   Eigen::Vector3d gravity{0, -9.81, 0};
   Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero();
