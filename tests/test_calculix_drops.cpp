@@ -12,6 +12,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <tuple>
 
 #include "models/observation/observation_set.h"
 #include "models/sim/observation_setup.h"
@@ -153,40 +154,54 @@ TEST_F(CalculixDropsFit, DiagnoseFitsTheDiscretizationControlOnHalfTheCellSize) 
 }
 
 // `lm` on a rough cost (docs/reconstruction.md, Stopping): on the CalculiX friction slide with 6
-// elements a 0.2 m edge, friction held at ccx's 0.5, one start of the modulus drawn at 9.3 kPa
-// stopped at 15.5 kPa on "converged: step < tol" while the cost still fell towards its lowest
-// near 80 kPa (the adjoint gradient -2.6e-8 per Pa there): the contact set and the line search's
-// step choice make the cost jump on the scale of the forward-difference step. The exact
-// gradient's probe must call it a stall, not convergence, and end lower. On the 3-element slide
-// the same fit converges (67.6 kPa), and the probe must leave it so.
-TEST_F(CalculixDropsFit, AOneStartFitThatStallsOnARoughCostIsNotCalledConverged) {
+// elements a 0.2 m edge, friction held at ccx's 0.5, on the world's grid (which cuts the turned
+// cube's faces), one start of the modulus drawn at 9.3 kPa stopped at 15.5 kPa on "converged:
+// step < tol" while the cost still fell towards its lowest near 80 kPa: the contact set and the
+// line search's step choice make the cost jump on the scale of the forward-difference step. The
+// exact gradient's probe must call it a stall, and the start go on from there, not end
+// converged. On the cube's own grid (the default) the same fits converge near CalculiX's
+// 50 kPa: 56.9 kPa with 6 elements a side, 49.9 kPa with 3 (on the world grid the 3-element
+// fit converged at 67.6 kPa).
+TEST_F(CalculixDropsFit, AOneStartFitThatStallsOnARoughCostGoesOnAndIsNotCalledConverged) {
   const std::string root = std::string(SSC_TEST_DATA_DIR) + "/calculix_drops/";
-  auto fit = [&](const std::string& name) {
+  auto fit = [&](const std::string& name, const std::string& frame) {
     std::string out, err;
-    const std::string obs = (dir_ / (name + "-obs")).string(), result = (dir_ / (name + "-fit")).string();
-    EXPECT_EQ(run("render '" + root + name + "/frames' --cameras '" + root + name +
-                      "/scene.json' --fps 60 --noise 0.002 --seed 7 --quiet --out '" + obs + "'",
-                  &out, &err),
-              0)
-        << out << err;
+    const std::string obs = (dir_ / (name + "-obs")).string(), result = (dir_ / (name + "-" + frame + "-fit")).string();
+    if (!fs::exists(obs)) {
+      EXPECT_EQ(run("render '" + root + name + "/frames' --cameras '" + root + name +
+                        "/scene.json' --fps 60 --noise 0.002 --seed 7 --quiet --out '" + obs + "'",
+                    &out, &err),
+                0)
+          << out << err;
+    }
     EXPECT_EQ(run("reconstruct '" + root + name + "/scene.json' --observations '" + obs +
                       "' --fit youngs_modulus --starts 1 --iterations 12 --optimizer lm --device cpu --quiet --out '" +
-                      result + "'",
+                      result + "' --set 'grid.frame=\"" + frame + "\"'",
                   &out, &err),
               0)
         << out << err;
     return read_json(fs::path(result) / "result.json");
   };
-  const json six = fit("friction_6");
-  const json& start = six.at("starts").at(0);
-  const std::string reason = start.at("stop_reason").get<std::string>();
-  EXPECT_EQ(reason.rfind("stalled: after 'converged: step < tol'", 0), 0u) << reason;
-  EXPECT_FALSE(start.at("converged").get<bool>());
-  const double E = six.at("parameters").at("youngs_modulus").get<double>();
-  EXPECT_GT(E, 15600) << "the stall's end is the probe, down the exact gradient from 15.5 kPa";
-  const json three = fit("friction");
-  EXPECT_TRUE(three.at("starts").at(0).at("converged").get<bool>()) << three.at("starts").at(0).at("stop_reason");
-  EXPECT_NEAR(three.at("parameters").at("youngs_modulus").get<double>(), 67610, 700);
+  const json world = fit("friction_6", "world");
+  const json& start = world.at("starts").at(0);
+  std::printf("world grid, 6 elements: %s, %d iterations, went on %d times, E %.0f Pa\n",
+              start.at("stop_reason").get<std::string>().c_str(), start.at("iterations").get<int>(),
+              start.value("restarts_after_a_stall", 0), world.at("parameters").at("youngs_modulus").get<double>());
+  EXPECT_GE(start.value("restarts_after_a_stall", 0), 1) << start.dump();
+  EXPECT_FALSE(start.at("converged").get<bool>()) << start.at("stop_reason");
+  EXPECT_GT(world.at("parameters").at("youngs_modulus").get<double>(), 15600)
+      << "it went on down the exact gradient from 15.5 kPa";
+  for (const auto& [name, low, high] : {std::tuple<std::string, double, double>{"friction_6", 42500, 57500},
+                                        std::tuple<std::string, double, double>{"friction", 42500, 57500}}) {
+    const json own = fit(name, "object");
+    const json& s0 = own.at("starts").at(0);
+    const double E = own.at("parameters").at("youngs_modulus").get<double>();
+    std::printf("the cube's own grid, %s: %s, E %.0f Pa (CalculiX 50000)\n", name.c_str(),
+                s0.at("stop_reason").get<std::string>().c_str(), E);
+    EXPECT_TRUE(s0.at("converged").get<bool>()) << name << ": " << s0.at("stop_reason");
+    EXPECT_GT(E, low) << name;
+    EXPECT_LT(E, high) << name;
+  }
 }
 
 }  // namespace

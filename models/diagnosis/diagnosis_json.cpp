@@ -23,7 +23,10 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   auto convergence = [](const FittedModel& m) {
     nlohmann::json per_start = nlohmann::json::array();
     for (const FitStart& s : m.per_start)
-      per_start.push_back({{"stop_reason", s.stop_reason}, {"iterations", s.iterations}, {"costs", s.costs}});
+      per_start.push_back({{"stop_reason", s.stop_reason},
+                           {"iterations", s.iterations},
+                           {"restarts_after_a_stall", s.restarts},
+                           {"costs", s.costs}});
     return nlohmann::json{{"stop_reason", m.stop_reason},
                           {"converged_starts", m.converged_starts},
                           {"starts", m.starts},

@@ -36,6 +36,7 @@ struct FitStart {
   std::string stop_reason;
   int iterations = 0;
   std::vector<double> costs;
+  int restarts = 0;  // how often it went on from a stall (models/optim/reconstruction.cpp)
 };
 
 // One fitted model (the base, a candidate or a placebo).

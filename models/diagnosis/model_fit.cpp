@@ -197,7 +197,7 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
     fm.seconds = batch_seconds;
     for (size_t s = m * S; s < (m + 1) * S; ++s) {
       fm.converged_starts += stopped_converged(r.starts[s].stop_reason);
-      fm.per_start.push_back({r.starts[s].stop_reason, r.starts[s].iterations, r.starts[s].cost_history});
+      fm.per_start.push_back({r.starts[s].stop_reason, r.starts[s].iterations, r.starts[s].cost_history, r.starts[s].restarts});
     }
     fm.starts = int(S);
     // The fit is the best start whose parameters also simulate the frames held out: a start

@@ -3,6 +3,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <memory>
@@ -168,24 +169,29 @@ void finish_start(StartRecord& rec, const StartSpace& space, int iterations, con
 // fall that the exact gradient sees, and the damping shrinks the step to nothing (the CalculiX
 // friction cube, docs/diagnosis.md). Each start that claims convergence is probed kStallProbe
 // (in the optimiser's coordinates) down its exact (adjoint) gradient; a cost lower there by
-// more than kStallDrop of its own is a stall, not a minimum: the start ends at the probe (its
-// `final`; the history keeps the accepted iterations only), and its stop reason says so.
+// more than kStallDrop of its own is a stall, not a minimum: the start goes on from the probe
+// with the iterations it has left (a fresh optimiser there: its damping and secant term are of
+// the point it left), at most kStallRestarts times; a stall after that, or with no iteration
+// left, ends the start at the probe (its `final`) with a stop reason that says so. Returns the
+// stalled starts.
 constexpr double kStallProbe = 0.05;
 constexpr double kStallDrop = 0.01;
+constexpr int kStallRestarts = 2;
 
-void check_convergence_claims(const PhysicalParameters& base,
+std::vector<int> check_convergence_claims(const PhysicalParameters& base,
                               const SurfaceConstraintCost& cost, BatchSimulations& sims,
                               const std::vector<StartSpace>& spaces, ReconstructionResult& result,
-                              const std::vector<LevenbergMarquardt>& lm, std::vector<std::string>& reasons,
+                              const std::vector<LevenbergMarquardt>& lm, const std::vector<char>& ran,
+                              std::vector<std::string>& reasons,
                               std::vector<Eigen::VectorXd>& points, std::vector<double>& costs) {
-  std::vector<int> claimed;
+  std::vector<int> claimed, stalled;
   std::vector<Eigen::VectorXd> at;
   for (int s = 0; s < int(lm.size()); ++s)
-    if (lm[s].converged() && lm[s].best_point().size() > 0 && !result.starts[s].cost_history.empty()) {
+    if (ran[size_t(s)] && lm[s].converged() && lm[s].best_point().size() > 0 && !result.starts[s].cost_history.empty()) {
       claimed.push_back(s);
       at.push_back(spaces[s].to_physical(lm[s].best_point()));
     }
-  if (claimed.empty()) return;
+  if (claimed.empty()) return stalled;
   const std::vector<PointEvaluation> e = evaluate_batch(sims, cost, base, result.names, at, true, nullptr, {});
   result.evaluations += int(at.size());
   std::vector<int> probed;
@@ -201,13 +207,14 @@ void check_convergence_claims(const PhysicalParameters& base,
     probe_z.push_back(z);
     probes.push_back(spaces[s].to_physical(z));
   }
-  if (probes.empty()) return;
+  if (probes.empty()) return stalled;
   const std::vector<PointEvaluation> p = evaluate_batch(sims, cost, base, result.names, probes, false, nullptr, {});
   result.evaluations += int(probes.size());
   for (size_t k = 0; k < probed.size(); ++k) {
     const int s = probed[k];
     const double before = lm[s].best_cost();
     if (!p[k].ok || !(p[k].value.cost < (1 - kStallDrop) * before)) continue;
+    stalled.push_back(s);
     reasons[size_t(s)] = fmt::format(
         "stalled: after '{}', the cost is {:.1f} % lower a step of {:g} down the exact gradient: a rough cost "
         "whose fall the forward differences missed",
@@ -219,27 +226,22 @@ void check_convergence_claims(const PhysicalParameters& base,
     rec.matched_points = rec.observed_points = 0;
     for (const FrameCost& f : rec.frames) rec.matched_points += f.matched, rec.observed_points += f.points;
   }
+  return stalled;
 }
 
 // Levenberg-Marquardt starts (levenberg_marquardt.h): each round, every running start's trial
 // point and its probes, n + 1 points per start, as one batch of forward simulations whose
-// residual vectors are taken at the observed frames.
-void fit_least_squares(const Problem& problem, const ReconstructionOptions& o, const PhysicalParameters& base,
-                       const SurfaceConstraintCost& cost, BatchSimulations& sims, const std::vector<StartSpace>& spaces,
-                       ReconstructionResult& result, const ReconstructionProgress& progress) {
-  const SurfaceResiduals residuals(cost, problem.frames);
+// residual vectors are taken at the observed frames; until every start is done.
+void run_rounds(std::vector<LevenbergMarquardt>& lm, const SurfaceResiduals& residuals, const ReconstructionOptions& o,
+                const PhysicalParameters& base, const SurfaceConstraintCost& cost, BatchSimulations& sims,
+                const std::vector<StartSpace>& spaces, ReconstructionResult& result,
+                const ReconstructionProgress& progress, int& round) {
   const int S = int(spaces.size());
-  std::vector<LevenbergMarquardt> lm;
-  for (int s = 0; s < S; ++s) {
-    std::vector<char> bounded;
-    for (const ParameterAxis& a : spaces[s].space().axes()) bounded.push_back(a.kind == ParameterAxis::Kind::Bounded);
-    lm.emplace_back(spaces[s].to_internal(result.starts[s].initial), o.optimizer_options, o.fd_step, bounded);
-  }
-  for (int round = 0;; ++round) {
+  for (;; ++round) {
     std::vector<int> active;
     for (int s = 0; s < S; ++s)
       if (!lm[s].done()) active.push_back(s);
-    if (active.empty()) break;
+    if (active.empty()) return;
     std::vector<Eigen::VectorXd> points;
     std::vector<size_t> first;
     for (int s : active) {
@@ -276,20 +278,57 @@ void fit_least_squares(const Problem& problem, const ReconstructionOptions& o, c
       if (best >= 0) progress(round + 1, int(active.size()), lm[best].best_cost(), spaces[best].to_physical(lm[best].best_point()));
     }
   }
-  std::vector<std::string> reasons;
-  std::vector<Eigen::VectorXd> finals;
-  std::vector<double> final_costs;
+}
+
+// The `lm` starts run to their stops; each convergence claim is checked, and a start that
+// stalled goes on from the probe (check_convergence_claims).
+void fit_least_squares(const Problem& problem, const ReconstructionOptions& o, const PhysicalParameters& base,
+                       const SurfaceConstraintCost& cost, BatchSimulations& sims, const std::vector<StartSpace>& spaces,
+                       ReconstructionResult& result, const ReconstructionProgress& progress) {
+  const SurfaceResiduals residuals(cost, problem.frames);
+  const int S = int(spaces.size());
+  const size_t starts = spaces.size();
+  std::vector<LevenbergMarquardt> lm;
+  std::vector<std::vector<char>> bounded(starts);
   for (int s = 0; s < S; ++s) {
-    reasons.push_back(lm[s].stop_reason());
-    finals.push_back(lm[s].best_point());
-    final_costs.push_back(lm[s].best_cost());
+    for (const ParameterAxis& a : spaces[s].space().axes()) bounded[size_t(s)].push_back(a.kind == ParameterAxis::Kind::Bounded);
+    lm.emplace_back(spaces[s].to_internal(result.starts[s].initial), o.optimizer_options, o.fd_step, bounded[size_t(s)]);
   }
-  check_convergence_claims(base, cost, sims, spaces, result, lm, reasons, finals, final_costs);
+  std::vector<int> spent(starts, 0), restarts(starts, 0);  // iterations of the passes before; restarts
+  std::vector<char> ran(starts, 1);                        // the starts that ran in this pass
+  std::vector<std::string> reasons(starts);
+  std::vector<Eigen::VectorXd> finals(starts);
+  std::vector<double> final_costs(starts);
+  for (int round = 0;;) {  // passes: all starts, then those that went on from a stall
+    run_rounds(lm, residuals, o, base, cost, sims, spaces, result, progress, round);
+    for (int s = 0; s < S; ++s)
+      if (ran[size_t(s)]) {
+        reasons[size_t(s)] = lm[s].stop_reason();
+        finals[size_t(s)] = lm[s].best_point();
+        final_costs[size_t(s)] = lm[s].best_cost();
+      }
+    const std::vector<int> stalled =
+        check_convergence_claims(base, cost, sims, spaces, result, lm, ran, reasons, finals, final_costs);
+    std::fill(ran.begin(), ran.end(), 0);
+    for (int s : stalled) {
+      const int left = o.optimizer_options.max_iterations - spent[size_t(s)] - lm[s].iterations();
+      if (restarts[size_t(s)] >= kStallRestarts || left <= 0) continue;
+      spent[size_t(s)] += lm[s].iterations();
+      ++restarts[size_t(s)];
+      OptimizerOptions rest = o.optimizer_options;
+      rest.max_iterations = left;
+      lm[s] = LevenbergMarquardt(finals[size_t(s)], rest, o.fd_step, bounded[size_t(s)]);
+      ran[size_t(s)] = 1;
+    }
+    if (std::find(ran.begin(), ran.end(), 1) == ran.end()) break;
+  }
   for (int s = 0; s < S; ++s) {
     StartRecord& rec = result.starts[s];
     rec.failed = rec.cost_history.empty();  // its start point could not be evaluated
     if (rec.failed) rec.failure = lm[s].failure().empty() ? lm[s].stop_reason() : lm[s].failure();
-    finish_start(rec, spaces[s], lm[s].iterations(), reasons[size_t(s)], finals[size_t(s)], final_costs[size_t(s)]);
+    rec.restarts = restarts[size_t(s)];
+    finish_start(rec, spaces[s], spent[size_t(s)] + lm[s].iterations(), reasons[size_t(s)], finals[size_t(s)],
+                 final_costs[size_t(s)]);
   }
 }
 

@@ -67,6 +67,7 @@ struct StartRecord {
   std::vector<double> cost_history;                // per iteration (cost at the point evaluated)
   std::vector<Eigen::VectorXd> parameter_history;  // physical values per iteration
   int iterations = 0;
+  int restarts = 0;  // lm: how often it went on from a stall (reconstruction.cpp, check_convergence_claims)
   // "converged: ...", "iteration limit" or "failed: ..." (docs/reconstruction.md#stopping);
   // converged: the reason starts with "converged".
   std::string stop_reason;

@@ -291,6 +291,7 @@ Command register_reconstruct(CLI::App& app) {
       e["iterations"] = rec.iterations;
       e["stop_reason"] = rec.stop_reason;
       e["converged"] = rec.converged;
+      if (rec.restarts > 0) e["restarts_after_a_stall"] = rec.restarts;
       if (!rec.failed) {
         e["final_gradient_norm"] = rec.final_gradient_norm;
         e["matched_points"] = rec.matched_points;
