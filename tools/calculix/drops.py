@@ -160,6 +160,12 @@ CASES = {
              "back to failure at its landing)",
         E=5e4, shape="cylinder", planes=[(30.0, 0.0, 0.0, None), (90.0, 180.0, -0.5, None)], gap=0.04,
         velocity=(1.5, -1.0, 0.0), duration=0.45, contact="SURFACE TO SURFACE"),
+    "cylinder": dict(
+        what="a cylinder (radius 0.1 m, 0.2 m long, lying on its side, its axis across the slope) dropped onto a "
+             "frictionless 30 degree incline and sliding down it: a third shape, clean (surface-to-surface contact, "
+             "as cylinder_wall)",
+        E=5e4, shape="cylinder", planes=[(30.0, 0.0, 0.0, None)], gap=0.04, velocity=(0.5, -1.0, 0.0),
+        duration=0.35, contact="SURFACE TO SURFACE"),
     "friction_low": dict(
         what="the friction case with mu = 0.25, below tan 20 = 0.36: it speeds up at "
              "g (sin a - mu cos a) = 1.05 m/s^2 (a brick with friction made ccx cut back to failure at 10-25 ms, "

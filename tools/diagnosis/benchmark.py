@@ -140,7 +140,7 @@ def cases():
 # scene is made from the truth's scene.json that drops.py writes (the effect taken out).
 CALCULIX_EFFECTS = {"clean": "none", "clean_slide": "none", "clean_brick": "none", "friction": "friction",
                     "friction_low": "friction", "two_materials": "two_materials", "second_plane": "second_plane",
-                    "floor_below": "second_plane", "cylinder_wall": "second_plane",
+                    "floor_below": "second_plane", "cylinder_wall": "second_plane", "cylinder": "none",
                     "neo_hookean": "nonlinear_material"}
 
 def without_effect(scene):
