@@ -178,12 +178,11 @@ constexpr double kStallProbe = 0.05;
 constexpr double kStallDrop = 0.01;
 constexpr int kStallRestarts = 2;
 
-std::vector<int> check_convergence_claims(const PhysicalParameters& base,
-                              const SurfaceConstraintCost& cost, BatchSimulations& sims,
-                              const std::vector<StartSpace>& spaces, ReconstructionResult& result,
-                              const std::vector<LevenbergMarquardt>& lm, const std::vector<char>& ran,
-                              std::vector<std::string>& reasons,
-                              std::vector<Eigen::VectorXd>& points, std::vector<double>& costs) {
+std::vector<int> check_convergence_claims(const PhysicalParameters& base, const SurfaceConstraintCost& cost,
+                                          BatchSimulations& sims, const std::vector<StartSpace>& spaces,
+                                          ReconstructionResult& result, const std::vector<LevenbergMarquardt>& lm,
+                                          const std::vector<char>& ran, std::vector<std::string>& reasons,
+                                          std::vector<Eigen::VectorXd>& points, std::vector<double>& costs) {
   std::vector<int> claimed, stalled;
   std::vector<Eigen::VectorXd> at;
   for (int s = 0; s < int(lm.size()); ++s)

@@ -36,11 +36,17 @@ if [ "${1:-}" = "--test-data" ]; then
         cp -r "$tmp/$c/frames" "$tmp/$c/scene.json" "$out/$c/"
     done
     # the friction slide (mu 0.5) with 6 elements a 0.2 m edge: its scene and surface frames
-    # (CalculixDropsFit.AOneStartFitThatStallsOnARoughCostIsNotCalledConverged)
+    # (CalculixDropsFit.AOneStartFitThatStallsOnARoughCostGoesOnAndIsNotCalledConverged)
     python3 "$here/drops.py" "$tmp/six" --cases friction --elements 6
     rm -rf "$out/friction_6"
     mkdir -p "$out/friction_6"
     cp -r "$tmp/six/friction/frames" "$tmp/six/friction/scene.json" "$out/friction_6/"
+    # the cylinder (a third shape, clean) with 6 elements, whole (0.35 s): its scene and surface frames
+    # (CalculixDropsFit.ACylinderDroppedOnTheInclineFitsCalculixsModulus)
+    python3 "$here/drops.py" "$tmp/six" --cases cylinder --elements 6
+    rm -rf "$out/cylinder"
+    mkdir -p "$out/cylinder"
+    cp -r "$tmp/six/cylinder/frames" "$tmp/six/cylinder/scene.json" "$tmp/six/cylinder/ccx_run.json" "$out/cylinder/"
     # the two-material cube, whole (0.35 s): scene, surface frames and their render with 1 mm noise
     # (tests/test_calculix_two_materials.cpp)
     python3 "$here/drops.py" "$tmp" --cases two_materials --elements 3
