@@ -28,6 +28,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
                            {"restarts_after_a_stall", s.restarts},
                            {"costs", s.costs}});
     return nlohmann::json{{"stop_reason", m.stop_reason},
+                          {"batches", m.batches},
                           {"converged_starts", m.converged_starts},
                           {"starts", m.starts},
                           {"per_start", per_start}};

@@ -56,6 +56,7 @@ struct FittedModel {
   std::string proposal;            // what the data proposed (a plane, an interface), if anything
   std::shared_ptr<const ModelSpec> spec;  // what was fitted: the scene keys and parameters of its model
   double seconds = 0;
+  int batches = 0;  // of simulations, of the fit this model was part of (ReconstructionResult::batches)
 };
 
 }  // namespace ssc

@@ -195,6 +195,7 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
     std::stable_sort(ranked.begin(), ranked.end(),
                      [&](size_t a, size_t b) { return r.starts[a].final_cost < r.starts[b].final_cost; });
     fm.seconds = batch_seconds;
+    fm.batches = r.batches;
     for (size_t s = m * S; s < (m + 1) * S; ++s) {
       fm.converged_starts += stopped_converged(r.starts[s].stop_reason);
       fm.per_start.push_back({r.starts[s].stop_reason, r.starts[s].iterations, r.starts[s].cost_history, r.starts[s].restarts});

@@ -14,6 +14,9 @@ namespace {
 constexpr int kMaxRejections = 30;
 constexpr double kMinDamping = 1e-12;
 constexpr double kCurvatureFloor = 1e-6;  // of the largest diagonal of J'J seen
+// The secant term is taken only where the cost fell by more than this times Gauss-Newton's
+// prediction: J'J clearly too curved, not a rough cost's scatter about it.
+constexpr double kSecantEvidence = 1.5;
 
 // A matrix over the free axes placed into an n x n one (zero on the held axes).
 Eigen::MatrixXd on_axes(const Eigen::MatrixXd& H, const std::vector<Eigen::Index>& free, Eigen::Index n) {
@@ -133,7 +136,8 @@ void LevenbergMarquardt::take(const std::vector<ResidualVector>& values) {
 }
 
 void LevenbergMarquardt::choose_model(double actual) {
-  augmented_ = o_.lm_secant && std::abs(actual - predicted_augmented_) < std::abs(actual - predicted_gauss_newton_);
+  augmented_ = o_.lm_secant && actual > kSecantEvidence * predicted_gauss_newton_ &&
+               std::abs(actual - predicted_augmented_) < std::abs(actual - predicted_gauss_newton_);
 }
 
 void LevenbergMarquardt::update_secant(const Eigen::VectorXd& s, const Eigen::MatrixXd& J_before) {

@@ -24,8 +24,10 @@
 // accepted step s (y = (J_new - J_old)' r_new, sized by min(1, |s'y| / |s'Ss|), then the
 // symmetric rank-two update that makes S s = y). Only S's negative part is used: a step that is
 // too long is the damping's to shorten. The next step's model is J'J + S- (its curvature floored
-// at 1e-6 of the largest diagonal of J'J) where that model predicted the last step's decrease
-// better than Gauss-Newton's, else J'J alone (NL2SOL's rule); OptimizerOptions::lm_secant = false
+// at 1e-6 of the largest diagonal of J'J) where the last trial's cost fell by more than 1.5
+// times Gauss-Newton's prediction and that model predicted the fall better (NL2SOL's rule, gated:
+// on a rough cost the actual decrease scatters about the prediction, and the secant term taken on
+// that scatter made a slow start slower), else J'J alone; OptimizerOptions::lm_secant = false
 // keeps J'J alone.
 //
 // Stop reasons (stop_reason(); converged() for the first three):

@@ -193,6 +193,7 @@ std::vector<int> check_convergence_claims(const PhysicalParameters& base, const 
   if (claimed.empty()) return stalled;
   const std::vector<PointEvaluation> e = evaluate_batch(sims, cost, base, result.names, at, true, nullptr, {});
   result.evaluations += int(at.size());
+  ++result.batches;
   std::vector<int> probed;
   std::vector<Eigen::VectorXd> probes, probe_z;
   for (size_t k = 0; k < claimed.size(); ++k) {
@@ -209,6 +210,7 @@ std::vector<int> check_convergence_claims(const PhysicalParameters& base, const 
   if (probes.empty()) return stalled;
   const std::vector<PointEvaluation> p = evaluate_batch(sims, cost, base, result.names, probes, false, nullptr, {});
   result.evaluations += int(probes.size());
+  ++result.batches;
   for (size_t k = 0; k < probed.size(); ++k) {
     const int s = probed[k];
     const double before = lm[s].best_cost();
@@ -250,6 +252,7 @@ void run_rounds(std::vector<LevenbergMarquardt>& lm, const SurfaceResiduals& res
     std::vector<PointEvaluation> e =
         evaluate_batch(sims, cost, base, result.names, points, false, &residuals, o.evaluation_progress);
     result.evaluations += int(points.size());
+    ++result.batches;
     for (size_t k = 0; k < active.size(); ++k) {
       const int s = active[k];
       const size_t n = size_t(spaces[s].space().size()) + 1, a = first[k];
@@ -410,6 +413,7 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
       const std::vector<PointEvaluation> e =
           evaluate_batch(sims, cost, base, result.names, points, !o.finite_differences, nullptr, o.evaluation_progress);
       result.evaluations += int(active.size());
+      ++result.batches;
       // The comparison the paper makes: central differences in the optimiser's coordinates
       // instead of the adjoint, all 2 x parameters x starts probes as one batch.
       std::vector<Eigen::VectorXd> fd_gradient(active.size());
@@ -425,6 +429,7 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
             }
         const std::vector<PointEvaluation> pe = evaluate_batch(sims, cost, base, result.names, probes, false);
         result.evaluations += int(probes.size());
+        ++result.batches;
         size_t a = 0;
         for (size_t k = 0; k < active.size(); ++k) {
           const int n = spaces[active[k]].space().size();

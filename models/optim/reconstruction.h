@@ -89,6 +89,9 @@ struct ReconstructionResult {
   std::vector<StartRecord> starts;
   int best = -1;  // index into starts, -1 if every start failed
   int evaluations = 0;  // simulations: forward and adjoint each, forward only for lm
+  // Batches of them run (one per round of the starts, and the checks): a GPU batch costs about
+  // the same however few starts are still going on, so these count its time.
+  int batches = 0;
   double wall_seconds = 0;
 };
 

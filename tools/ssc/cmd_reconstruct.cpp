@@ -276,6 +276,7 @@ Command register_reconstruct(CLI::App& app) {
     j["gradient"] = ro.optimizer == "lm" ? "residual forward differences" : o->gradient;
     j["seed"] = ro.seed;
     j["evaluations"] = r.evaluations;
+    j["batches"] = r.batches;
     j["wall_seconds"] = r.wall_seconds;
     j["device"] = describe_device(device);
     nlohmann::json starts = nlohmann::json::array();
