@@ -31,7 +31,7 @@ Eigen::MatrixXd on_axes(const Eigen::MatrixXd& H, const std::vector<Eigen::Index
 LevenbergMarquardt::LevenbergMarquardt(const Eigen::VectorXd& start, const OptimizerOptions& options, double fd_step,
                                        std::vector<char> bounded)
     : o_(options), h_(fd_step), z_(start), trial_(start), scale_(Eigen::VectorXd::Zero(start.size())),
-      bounded_(std::move(bounded)) {
+      bounded_(std::move(bounded)), S_(Eigen::MatrixXd::Zero(start.size(), start.size())) {
   if (!bounded_.empty() && bounded_.size() != size_t(start.size()))
     throw std::logic_error("LevenbergMarquardt: one bounded flag per axis");
 }
@@ -141,7 +141,6 @@ void LevenbergMarquardt::choose_model(double actual) {
 }
 
 void LevenbergMarquardt::update_secant(const Eigen::VectorXd& s, const Eigen::MatrixXd& J_before) {
-  if (S_.rows() != s.size()) S_ = Eigen::MatrixXd::Zero(s.size(), s.size());
   const double ss = s.squaredNorm();
   if (!(ss > 0)) return;
   const Eigen::VectorXd y = (J_ - J_before).transpose() * r_;  // the Hessian's second-order part along s
@@ -154,7 +153,6 @@ void LevenbergMarquardt::update_secant(const Eigen::VectorXd& s, const Eigen::Ma
 
 void LevenbergMarquardt::propose() {
   const Eigen::MatrixXd JtJ = J_.transpose() * J_;
-  if (S_.rows() != JtJ.rows()) S_ = Eigen::MatrixXd::Zero(JtJ.rows(), JtJ.cols());
   const double largest = scale_.maxCoeff();
   std::vector<Eigen::Index> free;
   for (Eigen::Index j = 0; j < z_.size(); ++j)
