@@ -122,6 +122,11 @@ CASES = {
     "clean": dict(
         what="cube dropped flat onto a frictionless 20 degree incline and sliding down it",
         E=5e4, planes=[(TILT, 0.0, 0.0, None)], gap=0.04, velocity=(0.3, -1.5, 0.0), duration=0.35),
+    "clean_gentle": dict(
+        what="the clean drop set down gently, 2 cm above the incline at 0.5 m/s: at the 60 Hz frames the body is "
+             "compressed by at most 4.9 % along the incline's normal, against the clean drop's 10 %, where CalculiX's "
+             "Neo-Hookean body and a corotated one differ by more than the depth noise",
+        E=5e4, planes=[(TILT, 0.0, 0.0, None)], gap=0.02, velocity=(0.3, -0.5, 0.0), duration=0.35),
     "clean_slide": dict(
         what="cube launched down a frictionless 20 degree incline at 1.2 m/s from 2 mm above it",
         E=5e4, planes=[(TILT, 0.0, 0.0, None)], gap=0.002, velocity=SLIDE, duration=0.35),
