@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -195,9 +196,11 @@ FittedModel fit_control(const std::string& control, const Diagnosis& d, const Di
   return m;
 }
 
-// Two fits side by side on one GPU: on the 360-step timing case (docs/benchmarks.md, "Several
-// GPUs"), 72 s against 89 s one after the other on one H200 machine, the same diagnosis.json.
-constexpr int kFitsPerGpu = 2;
+// Fits side by side on one GPU. On the 360-step timing case (docs/benchmarks.md, "Several
+// GPUs"): two, 72 s against 89 s one after the other on one H200 machine, the same
+// diagnosis.json; since the `lm` secant term and the restarts, 138.2, 133.5 and 127.5 s with
+// two, three and four (one H200 of a four-H200 machine, 2026-11-27, the same diagnosis.json).
+constexpr int kFitsPerGpu = 4;
 
 // A fit's cost relative to the others', to start the costliest first: half the time step
 // doubles the steps; an interface search or several plane proposals fit many models; a
@@ -218,16 +221,31 @@ double schedule_weight(const std::string& name) {
   return 1;
 }
 
+// The GPUs of step 3's fits, one entry a thread: kFitsPerGpu per GPU (SSC_FITS_PER_GPU=N: N),
+// the GPUs taking turns, so that the costliest fits start on different GPUs. Empty on the CPU
+// or with several ranks.
+std::vector<int> fit_threads(const DiagnosisContext& c) {
+  std::vector<int> gpus;
+  if (runs_on_gpu(c.options.device) && ranks::count() == 1) {
+    const char* per = std::getenv("SSC_FITS_PER_GPU");
+    for (int k = 0, n = per ? std::max(1, std::atoi(per)) : kFitsPerGpu; k < n; ++k)
+      for (int g : device_gpus(c.options.device)) gpus.push_back(g);
+  }
+  return gpus;
+}
+
 // Step 3 for every candidate the shared batch did not fit, in `order`, and the
-// discretization controls where asked for. On the GPU (with one rank) the fits run
-// side by side, kFitsPerGpu threads per GPU, each taking the next one; a fit's result does not
-// depend on which GPU ran it or what ran beside it. A skipped fit's reason goes to `skipped`.
+// discretization controls where asked for; then the jobs of `after` (each given its device).
+// On the GPU (with one rank) the fits run side by side, a thread of fit_threads() each taking
+// the next one; a fit's result does not depend on which GPU ran it or what ran beside it. A
+// skipped fit's reason goes to `skipped`.
 std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const DiagnosisContext& c, const Scene& scene,
                                                const std::vector<std::string>& order,
                                                const std::map<std::string, FittedModel>& shared_fits,
                                                std::vector<std::map<std::string, double>>& base_starts,
                                                std::map<std::string, std::string>& skipped,
-                                               const std::function<void(const std::string&)>& say) {
+                                               const std::function<void(const std::string&)>& say,
+                                               const std::vector<std::function<void(const std::string&)>>& after) {
   std::vector<std::string> names;
   if (c.options.discretization_controls)
     for (const std::string& control : discretization_controls()) names.push_back(control);
@@ -251,16 +269,16 @@ std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const Diagnos
     }
     say((is_control(names[k]) ? "the base model, " + names[k] : names[k]) + " done");
   };
-  // A fit's thread each, on its GPU: kFitsPerGpu per GPU (SSC_FITS_PER_GPU=N: N), the GPUs
-  // taking turns, so that the costliest fits start on different GPUs.
-  std::vector<int> gpus;
-  if (runs_on_gpu(c.options.device) && ranks::count() == 1) {
-    const char* per = std::getenv("SSC_FITS_PER_GPU");
-    for (int k = 0, n = per ? std::max(1, std::atoi(per)) : kFitsPerGpu; k < n; ++k)
-      for (int g : device_gpus(c.options.device)) gpus.push_back(g);
-  }
-  if (gpus.size() <= 1 || names.size() <= 1) {
-    for (size_t k = 0; k < names.size(); ++k) fit(k, c);
+  auto job = [&](size_t k, const DiagnosisContext& on) {
+    if (k < names.size())
+      fit(k, on);
+    else
+      after[k - names.size()](on.options.device);
+  };
+  const size_t jobs = names.size() + after.size();
+  const std::vector<int> gpus = fit_threads(c);
+  if (gpus.size() <= 1 || jobs <= 1) {
+    for (size_t k = 0; k < jobs; ++k) job(k, c);
   } else {
     std::atomic<size_t> next{gpus.size()};
     std::vector<std::thread> workers;
@@ -268,7 +286,7 @@ std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const Diagnos
       workers.emplace_back([&, w] {
         DiagnosisContext on = c;
         on.options.device = gpu_device(gpus[w]);
-        for (size_t k = w; k < names.size(); k = next++) fit(k, on);  // thread w starts with fit w
+        for (size_t k = w; k < jobs; k = next++) job(k, on);  // thread w starts with job w
       });
     for (std::thread& w : workers) w.join();
   }
@@ -429,39 +447,86 @@ std::vector<std::tuple<std::string, double, double>> moved_base(const FittedMode
 // model only; a cause's values can depend on the discretization where the base's do not: on
 // 25 mm cells a soft cube sliding with friction tips over where on 12.5 mm cells it rocks back,
 // and the modulus fitted with friction is a third higher (docs/diagnosis.md). Not run for a
-// measurement cause, or for a control that did not run. The refits run side by side.
-void refit_cause_on_controls(Diagnosis& d, const DiagnosisContext& c, const Scene& scene, const FittedModel& m) {
+// measurement cause, or for a control that did not run.
+struct ControlRefit {
+  std::string control;
+  ModelSpec spec;  // m's model with the control's overrides
+};
+
+std::vector<ControlRefit> control_refits(const FittedModel& m, const Scene& scene,
+                                         const std::vector<std::string>& controls) {
   const ExtensionRow* row = find_extension(m.name);
-  if (!row || row->fit == ExtensionRow::Fit::Measurement || !m.spec) return;
-  std::vector<ModelSpec> specs;
-  for (const Diagnosis::Control& k : d.controls) {
+  if (!row || row->fit == ExtensionRow::Fit::Measurement || !m.spec) return {};
+  std::vector<ControlRefit> out;
+  for (const std::string& name : controls) {
     std::string skipped;
-    if (k.fit.failed || k.fit.frame_costs.empty()) continue;
-    const ModelSpec control = discretization_spec(k.fit.name, scene, &skipped);
+    const ModelSpec control = discretization_spec(name, scene, &skipped);
     if (!skipped.empty()) continue;
     ModelSpec spec = *m.spec;
-    spec.name = m.name + " with " + k.fit.name;
+    spec.name = m.name + " with " + name;
     spec.overrides.insert(spec.overrides.end(), control.overrides.begin(), control.overrides.end());
     spec.note = control.note;
-    specs.push_back(spec);
-    d.cause_on_controls.push_back({k.fit.name, {}, {}});
+    out.push_back({name, spec});
   }
-  const std::map<std::string, double> fitted = values_by_name(m);
-  side_by_side(specs.size(), c.options.device, [&](size_t k, const std::string& device) {
-    DiagnosisContext on = c;
-    on.phi_max = d.base.problem.phi_max;
-    on.options.device = device;
-    Diagnosis::DiscretizationCheck& check = d.cause_on_controls[k];
-    std::vector<std::map<std::string, double>> start = {fitted};
-    try {
-      check.fit = std::move(fit_together({specs[k]}, on, start)[0]);
-    } catch (const std::exception& e) {
-      check.fit.failed = true;
-      check.fit.failure = e.what();
-    }
-    check.fit.proposal = specs[k].note;
-    if (!check.fit.failed) check.moved = moved_base(m, check.fit);
+  return out;
+}
+
+Diagnosis::DiscretizationCheck refit_on_control(const ControlRefit& r, const FittedModel& m, const DiagnosisContext& c,
+                                                double phi_max, const std::string& device) {
+  Diagnosis::DiscretizationCheck check{r.control, {}, {}};
+  DiagnosisContext on = c;
+  on.phi_max = phi_max;
+  on.options.device = device;
+  std::vector<std::map<std::string, double>> start = {values_by_name(m)};
+  try {
+    check.fit = std::move(fit_together({r.spec}, on, start)[0]);
+  } catch (const std::exception& e) {
+    check.fit.failed = true;
+    check.fit.failure = e.what();
+  }
+  check.fit.proposal = r.spec.note;
+  if (!check.fit.failed) check.moved = moved_base(m, check.fit);
+  return check;
+}
+
+// The controls that ran, in the order of discretization_controls().
+std::vector<std::string> controls_that_ran(const Diagnosis& d) {
+  std::vector<std::string> out;
+  for (const Diagnosis::Control& k : d.controls)
+    if (!k.fit.failed && !k.fit.frame_costs.empty()) out.push_back(k.fit.name);
+  return out;
+}
+
+// The refits side by side.
+void refit_cause_on_controls(Diagnosis& d, const DiagnosisContext& c, const Scene& scene, const FittedModel& m) {
+  const std::vector<ControlRefit> refits = control_refits(m, scene, controls_that_ran(d));
+  d.cause_on_controls.resize(refits.size());
+  side_by_side(refits.size(), c.options.device, [&](size_t k, const std::string& device) {
+    d.cause_on_controls[k] = refit_on_control(refits[k], m, c, d.base.problem.phi_max, device);
   });
+}
+
+// The shared batch's candidate with the largest held-out gain over the base where it clears the
+// gain bar: the likely cause. Its refits on the controls' discretizations run at the end of
+// step 3's queue (on the GPU they fill the time the longest fit runs alone: on the 360-step
+// timing case, docs/diagnosis.md) and are kept if it is the cause.
+std::string likely_cause(const Diagnosis& d, const std::map<std::string, FittedModel>& shared_fits,
+                         const DiagnosisOptions& o) {
+  std::string best;
+  double best_gain = o.min_gain;
+  for (const auto& [name, m] : shared_fits) {
+    if (m.failed || m.frame_costs.size() != d.base.frame_costs.size() || !m.spec) continue;
+    const double g = cost_gain(d.base.frame_costs, m.frame_costs, d.heldin_frames, -1, 1, o.seed).value;
+    if (g > best_gain) best = name, best_gain = g;
+  }
+  return best;
+}
+
+// The cause's refits run ahead for the likely cause: those of the controls that ran.
+void keep_early_refits(Diagnosis& d, const std::vector<Diagnosis::DiscretizationCheck>& early) {
+  for (const std::string& control : controls_that_ran(d))
+    for (const Diagnosis::DiscretizationCheck& check : early)
+      if (check.control == control) d.cause_on_controls.push_back(check);
 }
 
 // What a discretization check found, for the printed lines.
@@ -779,11 +844,25 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
 
   // Steps 2 and 3 at once on the GPU where one process runs alone (MPI needs its calls on this
   // thread; on the CPU the two would share the cores): the score test only orders the verdicts.
+  // The likely cause's refits on the controls' discretizations at the end of step 3's queue,
+  // where its fits run side by side.
+  const std::string likely =
+      o.discretization_controls && fit_threads(c).size() > 1 ? likely_cause(d, shared_fits, o) : std::string();
+  const std::vector<ControlRefit> early =
+      likely.empty() ? std::vector<ControlRefit>{} : control_refits(shared_fits.at(likely), scene, discretization_controls());
+  std::vector<Diagnosis::DiscretizationCheck> early_checks(early.size());
+  std::vector<std::function<void(const std::string&)>> after;
+  for (size_t k = 0; k < early.size(); ++k)
+    after.push_back([&, k](const std::string& device) {
+      say("fitting " + early[k].spec.name + " ahead (the likely cause)");
+      early_checks[k] = refit_on_control(early[k], shared_fits.at(likely), c, d.base.problem.phi_max, device);
+      say(early[k].spec.name + " done");
+    });
   std::map<std::string, FittedModel> own_fits;
   std::exception_ptr own_failure;
   auto fit_own_candidates = [&] {
     try {
-      own_fits = fit_own_all(d, c, scene, o.candidates, shared_fits, base_starts, skipped, say);
+      own_fits = fit_own_all(d, c, scene, o.candidates, shared_fits, base_starts, skipped, say, after);
     } catch (...) {
       own_failure = std::current_exception();
     }
@@ -862,7 +941,9 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
     } catch (const std::exception& e) {
       slices_failure = e.what();
     }
-    if (m.name == d.cause) {
+    if (m.name == d.cause && m.name == likely) {
+      keep_early_refits(d, early_checks);
+    } else if (m.name == d.cause) {
       say("the " + m.name + " fit on the controls' discretizations");
       refit_cause_on_controls(d, c, scene, m);
     }
