@@ -53,7 +53,7 @@ set(SSC_TESTS_slow
   NvrtcCompile.AllExampleKernelsDoubleAndFloat)
 
 set(SSC_TESTS_gpu
-  GpuAdjoint GpuExtension GpuForward GpuKernels GpuProfile GpuReconstruct)
+  GpuAdjoint GpuDiagnoseCli GpuExtension GpuForward GpuKernels GpuProfile GpuReconstruct)
 
 # Sets `out` to the label listed for `test` (Suite.Test) or its suite, or to "" if neither is listed.
 function(ssc_test_label test out)

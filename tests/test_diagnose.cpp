@@ -28,6 +28,7 @@
 #include "models/sim/parameters.h"
 #include "runtime/errors.h"
 #include "tests/cli_test_folder.h"
+#include "tests/gpu_test_support.h"
 
 namespace ssc {
 namespace {
@@ -329,6 +330,45 @@ TEST_F(DiagnoseCli, AirDragAndMassDampingTradeOffWhereTheYoungsModulusIsDetermin
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(c.correlation(i, i), 1.0, 1e-12);
   EXPECT_GT(c.gauss_newton(0, 0), 0);
   EXPECT_THROW(parameter_correlation(problem, truth, {"air_drag"}, {}, "cpu"), InputError);
+}
+
+// On the GPU, step 3's fits run side by side (four a GPU by default) with the likely cause's
+// refits on the controls' discretizations queued behind them; one a GPU runs them one after
+// another and refits the cause after the verdict. The diagnosis is the same.
+class GpuDiagnoseCli : public DiagnoseCli {};
+
+TEST_F(GpuDiagnoseCli, FitsSideBySideGiveTheDiagnosisOfOneAtATime) {
+  SKIP_WITHOUT_GPU();
+  observe(cube_scene(0.005, 0.4, 5e4, true), "obs");
+  const std::string fit = write("fit.json", cube_scene(0.01, 0.0, 1.25e5, false));
+  json d[2];
+  std::string said[2];
+  const char* prefix[2] = {"SSC_FITS_PER_GPU=1", ""};  // one GPU either way: --device cuda:0
+  for (int k = 0; k < 2; ++k) {
+    std::string out, err;
+    const std::string name = k == 0 ? "one" : "side_by_side";
+    const int code = run_with_prefix(prefix[k],
+                                     "diagnose '" + fit + "' --observations '" + (dir_ / "obs").string() + "' --out '" +
+                                         (dir_ / name).string() + "' --starts 3 --iterations 15 --device cuda:0",
+                                     &out, &err);
+    ASSERT_EQ(code, 0) << err;
+    d[k] = read_json(dir_ / name / "diagnosis.json");
+    said[k] = out + err;
+  }
+  EXPECT_EQ(d[0]["cause"], "friction");
+  EXPECT_EQ(d[1]["cause"], d[0]["cause"]);
+  EXPECT_EQ(said[0].find("ahead (the likely cause)"), std::string::npos);
+  EXPECT_NE(said[1].find("ahead (the likely cause)"), std::string::npos) << said[1];
+  for (const char* control : {"cause_on_finer_grid", "cause_on_finer_step"}) {
+    ASSERT_TRUE(d[0][control].is_object() && d[1][control].is_object()) << control;
+    for (const auto& [name, value] : d[0][control]["parameters"].items())
+      EXPECT_NEAR(d[1][control]["parameters"][name].get<double>(), value.get<double>(),
+                  1e-9 * std::abs(value.get<double>()))
+          << control << " " << name;
+  }
+  for (const auto& [name, value] : d[0]["base"]["parameters"].items())
+    EXPECT_NEAR(d[1]["base"]["parameters"][name].get<double>(), value.get<double>(), 1e-9 * std::abs(value.get<double>()))
+        << name;
 }
 
 }  // namespace
