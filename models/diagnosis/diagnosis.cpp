@@ -842,8 +842,6 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   std::map<std::string, std::string> skipped;
   std::map<std::string, FittedModel> shared_fits = fit_shared(d, c, scene, base_starts, shared_problem, skipped, say);
 
-  // Steps 2 and 3 at once on the GPU where one process runs alone (MPI needs its calls on this
-  // thread; on the CPU the two would share the cores): the score test only orders the verdicts.
   // The likely cause's refits on the controls' discretizations at the end of step 3's queue,
   // where its fits run side by side.
   const std::string likely =
@@ -858,6 +856,8 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
       early_checks[k] = refit_on_control(early[k], shared_fits.at(likely), c, d.base.problem.phi_max, device);
       say(early[k].spec.name + " done");
     });
+  // Steps 2 and 3 at once on the GPU where one process runs alone (MPI needs its calls on this
+  // thread; on the CPU the two would share the cores): the score test only orders the verdicts.
   std::map<std::string, FittedModel> own_fits;
   std::exception_ptr own_failure;
   auto fit_own_candidates = [&] {
