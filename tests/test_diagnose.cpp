@@ -343,13 +343,13 @@ TEST_F(GpuDiagnoseCli, FitsSideBySideGiveTheDiagnosisOfOneAtATime) {
   const std::string fit = write("fit.json", cube_scene(0.01, 0.0, 1.25e5, false));
   json d[2];
   std::string said[2];
-  const char* prefix[2] = {"SSC_FITS_PER_GPU=1", ""};  // one GPU either way: --device cuda:0
+  const char* prefix[2] = {"SSC_FITS_PER_GPU=1", ""};  // one GPU either way: --gpus 1
   for (int k = 0; k < 2; ++k) {
     std::string out, err;
     const std::string name = k == 0 ? "one" : "side_by_side";
     const int code = run_with_prefix(prefix[k],
                                      "diagnose '" + fit + "' --observations '" + (dir_ / "obs").string() + "' --out '" +
-                                         (dir_ / name).string() + "' --starts 3 --iterations 15 --device cuda:0",
+                                         (dir_ / name).string() + "' --starts 3 --iterations 15 --device cuda --gpus 1",
                                      &out, &err);
     ASSERT_EQ(code, 0) << err;
     d[k] = read_json(dir_ / name / "diagnosis.json");
