@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "models/diagnosis/candidates.h"
+#include "models/diagnosis/cause_on_controls.h"
 #include "models/diagnosis/held_out.h"
 #include "models/diagnosis/interface_search.h"
 #include "models/diagnosis/measurement_fit.h"
@@ -31,8 +32,6 @@ namespace {
 
 // At most this many proposed planes are fitted (as one batch).
 constexpr int kPlaneProposals = 3;
-// A base parameter that moves by more than this fraction once a candidate is modelled is reported.
-constexpr double kBaseChange = 0.1;
 // Seconds between two progress lines from within the fits.
 constexpr double kRoundLines = 10;
 // A fit within this fraction of a plausible range's end (of its logarithm for a range over
@@ -44,11 +43,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 }
 
 std::string percent(double x) { return fmt::format("{:.0f} %", 100 * x); }
-
-std::string with_unit(const std::string& name, double value) {
-  const std::string unit = parameter_or_measurement_unit(name);
-  return fmt::format("{:.4g}{}", value, unit == "1" ? "" : " " + unit);
-}
 
 // "youngs_modulus = 5e+04 Pa, ..." of a fit.
 std::string values_text(const FittedModel& m) {
@@ -170,6 +164,8 @@ FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const Diagnosis
     if (fits[best].failed || (!fits[i].failed && fits[i].heldin_cost < fits[best].heldin_cost)) best = i;
   fits[best].proposal = specs[best].note;
   if (fits.size() > 1) fits[best].proposal += fmt::format(" (the best of {} proposals, fitted as one batch)", fits.size());
+  for (size_t i = 0; i < fits.size(); ++i)
+    if (i != best) fits[best].other_proposals.push_back({specs[i].note, fits[i].failed, fits[i].heldin_cost, fits[i].per_start});
   return std::move(fits[best]);
 }
 
@@ -427,120 +423,6 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
           d.verdicts[first].degrees_of_freedom);
     d.cause = d.verdicts[named[0]].name;
   }
-}
-
-// The base parameters a candidate's fit moves by more than kBaseChange: (name, base, after).
-std::vector<std::tuple<std::string, double, double>> moved_base(const FittedModel& base, const FittedModel& m) {
-  const std::map<std::string, double> before = values_by_name(base);
-  std::vector<std::tuple<std::string, double, double>> out;
-  for (size_t k = 0; k < m.names.size(); ++k) {
-    const auto b = before.find(m.names[k]);
-    if (b == before.end() || b->second == 0) continue;
-    const double after = m.values[Eigen::Index(k)];
-    if (std::abs(after / b->second - 1) >= kBaseChange) out.emplace_back(m.names[k], b->second, after);
-  }
-  return out;
-}
-
-// After the verdict: a physical cause refitted on each discretization control's discretization,
-// from its fit, with the base's cost threshold (as the control). The controls refit the base
-// model only; a cause's values can depend on the discretization where the base's do not: on
-// 25 mm cells a soft cube sliding with friction tips over where on 12.5 mm cells it rocks back,
-// and the modulus fitted with friction is a third higher (docs/diagnosis.md). Not run for a
-// measurement cause, or for a control that did not run.
-struct ControlRefit {
-  std::string control;
-  ModelSpec spec;  // m's model with the control's overrides
-};
-
-std::vector<ControlRefit> control_refits(const FittedModel& m, const Scene& scene,
-                                         const std::vector<std::string>& controls) {
-  const ExtensionRow* row = find_extension(m.name);
-  if (!row || row->fit == ExtensionRow::Fit::Measurement || !m.spec) return {};
-  std::vector<ControlRefit> out;
-  for (const std::string& name : controls) {
-    std::string skipped;
-    const ModelSpec control = discretization_spec(name, scene, &skipped);
-    if (!skipped.empty()) continue;
-    ModelSpec spec = *m.spec;
-    spec.name = m.name + " with " + name;
-    spec.overrides.insert(spec.overrides.end(), control.overrides.begin(), control.overrides.end());
-    spec.note = control.note;
-    out.push_back({name, spec});
-  }
-  return out;
-}
-
-Diagnosis::DiscretizationCheck refit_on_control(const ControlRefit& r, const FittedModel& m, const DiagnosisContext& c,
-                                                double phi_max, const std::string& device) {
-  Diagnosis::DiscretizationCheck check{r.control, {}, {}};
-  DiagnosisContext on = c;
-  on.phi_max = phi_max;
-  on.options.device = device;
-  std::vector<std::map<std::string, double>> start = {values_by_name(m)};
-  try {
-    check.fit = std::move(fit_together({r.spec}, on, start)[0]);
-  } catch (const std::exception& e) {
-    check.fit.failed = true;
-    check.fit.failure = e.what();
-  }
-  check.fit.proposal = r.spec.note;
-  if (!check.fit.failed) check.moved = moved_base(m, check.fit);
-  return check;
-}
-
-// The controls that ran, in the order of discretization_controls().
-std::vector<std::string> controls_that_ran(const Diagnosis& d) {
-  std::vector<std::string> out;
-  for (const Diagnosis::Control& k : d.controls)
-    if (!k.fit.failed && !k.fit.frame_costs.empty()) out.push_back(k.fit.name);
-  return out;
-}
-
-// The refits side by side.
-void refit_cause_on_controls(Diagnosis& d, const DiagnosisContext& c, const Scene& scene, const FittedModel& m) {
-  const std::vector<ControlRefit> refits = control_refits(m, scene, controls_that_ran(d));
-  d.cause_on_controls.resize(refits.size());
-  side_by_side(refits.size(), c.options.device, [&](size_t k, const std::string& device) {
-    d.cause_on_controls[k] = refit_on_control(refits[k], m, c, d.base.problem.phi_max, device);
-  });
-}
-
-// The shared batch's candidate with the largest held-out gain over the base where it clears the
-// gain bar: the likely cause. Its refits on the controls' discretizations run at the end of
-// step 3's queue (on the GPU they fill the time the longest fit runs alone: on the 360-step
-// timing case, docs/diagnosis.md) and are kept if it is the cause.
-std::string likely_cause(const Diagnosis& d, const std::map<std::string, FittedModel>& shared_fits,
-                         const DiagnosisOptions& o) {
-  std::string best;
-  double best_gain = o.min_gain;
-  for (const auto& [name, m] : shared_fits) {
-    if (m.failed || m.frame_costs.size() != d.base.frame_costs.size() || !m.spec) continue;
-    const double g = cost_gain(d.base.frame_costs, m.frame_costs, d.heldin_frames, -1, 1, o.seed).value;
-    if (g > best_gain) best = name, best_gain = g;
-  }
-  return best;
-}
-
-// The cause's refits run ahead for the likely cause: those of the controls that ran.
-void keep_early_refits(Diagnosis& d, const std::vector<Diagnosis::DiscretizationCheck>& early) {
-  for (const std::string& control : controls_that_ran(d))
-    for (const Diagnosis::DiscretizationCheck& check : early)
-      if (check.control == control) d.cause_on_controls.push_back(check);
-}
-
-// What a discretization check found, for the printed lines.
-std::string control_check_line(const Diagnosis::DiscretizationCheck& g, const std::string& cause) {
-  const bool grid = g.control == "finer_grid";
-  if (g.fit.failed) return fmt::format("the {} fit on {} failed: {}", cause, g.fit.proposal, g.fit.failure);
-  if (g.moved.empty()) return fmt::format("on {}, the {} fit moves no parameter by 10 % or more", g.fit.proposal, cause);
-  std::string moved;
-  for (const auto& [name, here, there] : g.moved)
-    moved += fmt::format("{}{} from {} to {} ({:+.0f} %)", moved.empty() ? "" : ", ", name, with_unit(name, here),
-                         with_unit(name, there), 100 * (there / here - 1));
-  return fmt::format("on {}, the {} fit moves {}: its values depend on the {}; refit {} before trusting them",
-                     g.fit.proposal, cause, moved, grid ? "grid" : "time step",
-                     grid ? "on the finer grid" : "with the smaller time step");
 }
 
 // Step 5 (with no cause): candidates the data cannot tell from the base. Both gains, on the

@@ -20,18 +20,28 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   j["heldin_frames"] = d.heldin_frames;
   j["heldout_frames"] = d.heldout_frames;
   j["heldout_from_s"] = d.heldout_from;
-  auto convergence = [](const FittedModel& m) {
+  auto starts_json = [](const std::vector<FitStart>& starts) {
     nlohmann::json per_start = nlohmann::json::array();
-    for (const FitStart& s : m.per_start)
+    for (const FitStart& s : starts)
       per_start.push_back({{"stop_reason", s.stop_reason},
                            {"iterations", s.iterations},
                            {"restarts_after_a_stall", s.restarts},
+                           {"rounds", s.rounds},
                            {"costs", s.costs}});
-    return nlohmann::json{{"stop_reason", m.stop_reason},
-                          {"batches", m.batches},
-                          {"converged_starts", m.converged_starts},
-                          {"starts", m.starts},
-                          {"per_start", per_start}};
+    return per_start;
+  };
+  auto convergence = [&](const FittedModel& m) {
+    nlohmann::json c{{"stop_reason", m.stop_reason},
+                     {"batches", m.batches},
+                     {"converged_starts", m.converged_starts},
+                     {"starts", m.starts},
+                     {"per_start", starts_json(m.per_start)}};
+    for (const OtherProposal& p : m.other_proposals)
+      c["other_proposals"].push_back({{"proposal", p.proposal},
+                                      {"failed", p.failed},
+                                      {"heldin_cost", p.heldin_cost},
+                                      {"per_start", starts_json(p.per_start)}});
+    return c;
   };
   j["base"] = {{"parameters", named(d.base, false, nullptr)},
                {"heldin_cost", d.base.heldin_cost},

@@ -37,6 +37,15 @@ struct FitStart {
   int iterations = 0;
   std::vector<double> costs;
   int restarts = 0;  // how often it went on from a stall (models/optim/reconstruction.cpp)
+  int rounds = 0;    // the batches it took part in (StartRecord::rounds)
+};
+
+// A proposal fitted beside the one kept (the best of several planes, fitted as one batch).
+struct OtherProposal {
+  std::string proposal;
+  bool failed = false;
+  double heldin_cost = 0;
+  std::vector<FitStart> per_start;
 };
 
 // One fitted model (the base, a candidate or a placebo).
@@ -54,6 +63,7 @@ struct FittedModel {
   int starts = 0, converged_starts = 0;
   std::vector<FitStart> per_start;
   std::string proposal;            // what the data proposed (a plane, an interface), if anything
+  std::vector<OtherProposal> other_proposals;  // fitted in the same batch, not kept
   std::shared_ptr<const ModelSpec> spec;  // what was fitted: the scene keys and parameters of its model
   double seconds = 0;
   int batches = 0;  // of simulations, of the fit this model was part of (ReconstructionResult::batches)

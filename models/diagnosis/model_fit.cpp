@@ -93,6 +93,26 @@ std::vector<double> per_frame_costs(const Problem& problem, const PhysicalParame
   return out;
 }
 
+std::string with_unit(const std::string& name, double value) {
+  const std::string unit = parameter_or_measurement_unit(name);
+  return fmt::format("{:.4g}{}", value, unit == "1" ? "" : " " + unit);
+}
+
+// A base parameter that moves by more than this fraction once a candidate is modelled is reported.
+constexpr double kBaseChange = 0.1;
+
+std::vector<std::tuple<std::string, double, double>> moved_base(const FittedModel& base, const FittedModel& m) {
+  const std::map<std::string, double> before = values_by_name(base);
+  std::vector<std::tuple<std::string, double, double>> out;
+  for (size_t k = 0; k < m.names.size(); ++k) {
+    const auto b = before.find(m.names[k]);
+    if (b == before.end() || b->second == 0) continue;
+    const double after = m.values[Eigen::Index(k)];
+    if (std::abs(after / b->second - 1) >= kBaseChange) out.emplace_back(m.names[k], b->second, after);
+  }
+  return out;
+}
+
 Problem held_in(const Problem& p, int frames) {
   Problem q = p;
   q.frames.resize(size_t(frames));
@@ -198,7 +218,8 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
     fm.batches = r.batches;
     for (size_t s = m * S; s < (m + 1) * S; ++s) {
       fm.converged_starts += stopped_converged(r.starts[s].stop_reason);
-      fm.per_start.push_back({r.starts[s].stop_reason, r.starts[s].iterations, r.starts[s].cost_history, r.starts[s].restarts});
+      fm.per_start.push_back({r.starts[s].stop_reason, r.starts[s].iterations, r.starts[s].cost_history,
+                              r.starts[s].restarts, r.starts[s].rounds});
     }
     fm.starts = int(S);
     // The fit is the best start whose parameters also simulate the frames held out: a start

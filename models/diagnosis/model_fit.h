@@ -12,6 +12,7 @@
 #include <functional>
 #include <map>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -54,6 +55,10 @@ bool stopped_converged(const std::string& stop_reason);
 // simulation's (its correction is in the problem's frames) and is left out.
 PhysicalParameters with_values(const Scene& scene, const std::vector<std::string>& names, const Eigen::VectorXd& v);
 std::map<std::string, double> values_by_name(const FittedModel& m);
+// "52 kPa"-style: the value with its parameter's (or measurement's) unit.
+std::string with_unit(const std::string& name, double value);
+// The base parameters m's fit moves by 10 % or more from base's: (name, base's value, m's).
+std::vector<std::tuple<std::string, double, double>> moved_base(const FittedModel& base, const FittedModel& m);
 // Every frame's J_SSC term at p.
 std::vector<double> per_frame_costs(const Problem& problem, const PhysicalParameters& p, const std::string& device);
 Problem held_in(const Problem& p, int frames);

@@ -255,6 +255,7 @@ void run_rounds(std::vector<LevenbergMarquardt>& lm, const SurfaceResiduals& res
     ++result.batches;
     for (size_t k = 0; k < active.size(); ++k) {
       const int s = active[k];
+      ++result.starts[s].rounds;
       const size_t n = size_t(spaces[s].space().size()) + 1, a = first[k];
       std::string failure;
       std::vector<ResidualVector> r;
@@ -414,6 +415,7 @@ ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOpt
           evaluate_batch(sims, cost, base, result.names, points, !o.finite_differences, nullptr, o.evaluation_progress);
       result.evaluations += int(active.size());
       ++result.batches;
+      for (int s : active) ++result.starts[s].rounds;
       // The comparison the paper makes: central differences in the optimiser's coordinates
       // instead of the adjoint, all 2 x parameters x starts probes as one batch.
       std::vector<Eigen::VectorXd> fd_gradient(active.size());

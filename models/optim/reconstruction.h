@@ -68,6 +68,9 @@ struct StartRecord {
   std::vector<Eigen::VectorXd> parameter_history;  // physical values per iteration
   int iterations = 0;
   int restarts = 0;  // lm: how often it went on from a stall (reconstruction.cpp, check_convergence_claims)
+  // The batches of the starts' rounds it took part in (lm: its first evaluation, its iterations
+  // and its rejected trials; a GPU round costs about the same however few starts take part).
+  int rounds = 0;
   // "converged: ...", "iteration limit" or "failed: ..." (docs/reconstruction.md#stopping);
   // converged: the reason starts with "converged".
   std::string stop_reason;

@@ -293,6 +293,7 @@ Command register_reconstruct(CLI::App& app) {
       e["stop_reason"] = rec.stop_reason;
       e["converged"] = rec.converged;
       if (rec.restarts > 0) e["restarts_after_a_stall"] = rec.restarts;
+      if (rec.rounds > 0) e["rounds"] = rec.rounds;
       if (!rec.failed) {
         e["final_gradient_norm"] = rec.final_gradient_norm;
         e["matched_points"] = rec.matched_points;
