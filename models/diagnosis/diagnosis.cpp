@@ -158,7 +158,7 @@ FittedModel fit_own(const ExtensionRow& row, const Diagnosis& d, const Diagnosis
     }
   }
   if (!skipped->empty()) return FittedModel{};
-  std::vector<FittedModel> fits = fit_together(specs, c, starts);
+  std::vector<FittedModel> fits = fit_together(specs, c, starts, nullptr, specs.size() > 1);
   size_t best = 0;
   for (size_t i = 1; i < fits.size(); ++i)
     if (fits[best].failed || (!fits[i].failed && fits[i].heldin_cost < fits[best].heldin_cost)) best = i;

@@ -121,7 +121,7 @@ Problem held_in(const Problem& p, int frames) {
 
 std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const DiagnosisContext& c,
                                       std::vector<std::map<std::string, double>>& base_starts,
-                                      Problem* shared_problem) {
+                                      Problem* shared_problem, bool competing) {
   const auto t0 = std::chrono::steady_clock::now();
   const DiagnosisOptions& o = c.options;
   std::vector<std::string> all_overrides = c.overrides, fit = o.fit;
@@ -177,6 +177,7 @@ std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const
       }
       ro.initial_values.push_back(x);
       ro.start_free.push_back(free);
+      if (competing) ro.competing_models.push_back(int(model_names.size()) - 1);
     }
   }
   ReconstructionProgress told;

@@ -68,8 +68,10 @@ Problem held_in(const Problem& p, int frames);
 // others at their extension's off value or the spec's fixed value. With base_starts empty the
 // base parameters' starts are drawn as `reconstruct` draws them and stored there; otherwise
 // they are taken from there. shared_problem (optional) receives the shared scene's problem.
+// competing: only the best of the specs' models will be kept (proposals fitted as one batch;
+// ReconstructionOptions::competing_models).
 std::vector<FittedModel> fit_together(const std::vector<ModelSpec>& specs, const DiagnosisContext& c,
                                       std::vector<std::map<std::string, double>>& base_starts,
-                                      Problem* shared_problem = nullptr);
+                                      Problem* shared_problem = nullptr, bool competing = false);
 
 }  // namespace ssc

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -313,9 +314,16 @@ void fit_least_squares(const Problem& problem, const ReconstructionOptions& o, c
     const std::vector<int> stalled =
         check_convergence_claims(base, cost, sims, spaces, result, lm, ran, reasons, finals, final_costs);
     std::fill(ran.begin(), ran.end(), 0);
+    // A stalled start of a model out of contention stays stalled: only the best model is kept.
+    std::vector<double> reached(starts, std::numeric_limits<double>::infinity());
+    for (size_t s = 0; s < starts; ++s)
+      if (!result.starts[s].cost_history.empty()) reached[s] = final_costs[s];
+    const std::vector<char> contending = o.competing_models.size() == starts
+                                             ? in_contention(o.competing_models, reached)
+                                             : std::vector<char>(starts, 1);
     for (int s : stalled) {
       const int left = o.optimizer_options.max_iterations - spent[size_t(s)] - lm[s].iterations();
-      if (restarts[size_t(s)] >= kStallRestarts || left <= 0) continue;
+      if (restarts[size_t(s)] >= kStallRestarts || left <= 0 || !contending[size_t(s)]) continue;
       spent[size_t(s)] += lm[s].iterations();
       ++restarts[size_t(s)];
       OptimizerOptions rest = o.optimizer_options;
@@ -336,6 +344,18 @@ void fit_least_squares(const Problem& problem, const ReconstructionOptions& o, c
 }
 
 }  // namespace
+
+std::vector<char> in_contention(const std::vector<int>& model, const std::vector<double>& cost) {
+  std::map<int, double> best;  // per model
+  for (size_t s = 0; s < model.size() && s < cost.size(); ++s)
+    if (std::isfinite(cost[s]) && (!best.count(model[s]) || cost[s] < best[model[s]])) best[model[s]] = cost[s];
+  double lowest = std::numeric_limits<double>::infinity();
+  for (const auto& [m, c] : best) lowest = std::min(lowest, c);
+  std::vector<char> out(model.size(), 0);
+  for (size_t s = 0; s < model.size(); ++s)
+    out[s] = best.count(model[s]) && best[model[s]] <= (1 + kCompetingMargin) * lowest;
+  return out;
+}
 
 ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOptions& o,
                                  const ReconstructionProgress& progress) {

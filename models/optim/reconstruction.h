@@ -53,6 +53,11 @@ struct ReconstructionOptions {
   // Starts that fit different subsets of one model's parameters so run as one batch (`ssc
   // diagnose`: the base model, its placebos and several extensions at once). Empty: all.
   std::vector<std::vector<int>> start_free;
+  // With initial_values: per start, the model it fits, where the models compete and only the
+  // best is kept (`ssc diagnose`'s proposed planes, fitted as one batch). lm: a stalled start of
+  // a model whose best cost is more than kCompetingMargin above the best model's does not go
+  // on (reconstruction.cpp, check_convergence_claims). Empty: one model.
+  std::vector<int> competing_models;
   bool finite_differences = false;  // central differences instead of the adjoint (for comparison; not with lm)
   double fd_step = 1e-4;            // in the optimiser's internal coordinates (log space: 0.01 %); also lm's
   std::string device = "cpu";       // "cuda" or "cuda:K": on the GPUs (models/sim/compute_device.h)
@@ -105,6 +110,13 @@ void check_optimizer_name(const std::string& name);
 
 ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOptions& options,
                                  const ReconstructionProgress& progress = {});
+
+// For competing models (ReconstructionOptions::competing_models: start -> model) and each
+// start's cost: whether the start's model is still in contention, its best cost within
+// kCompetingMargin of the lowest model's (a start with no cost, NaN or infinite, counts for
+// none). Exposed for tests.
+constexpr double kCompetingMargin = 0.1;
+std::vector<char> in_contention(const std::vector<int>& model, const std::vector<double>& cost);
 
 // The sampled start values (physical), exposed for tests.
 // The start ranges a scene gives (its planes' height_range), by parameter name.
