@@ -28,9 +28,9 @@ std::vector<ControlRefit> control_refits(const FittedModel& m, const Scene& scen
   return out;
 }
 
-Diagnosis::DiscretizationCheck refit_on_control(const ControlRefit& r, const FittedModel& m, const DiagnosisContext& c,
+DiscretizationCheck refit_on_control(const ControlRefit& r, const FittedModel& m, const DiagnosisContext& c,
                                                 double phi_max, const std::string& device) {
-  Diagnosis::DiscretizationCheck check{r.control, {}, {}};
+  DiscretizationCheck check{r.control, {}, {}};
   DiagnosisContext on = c;
   on.phi_max = phi_max;
   on.options.device = device;
@@ -46,40 +46,38 @@ Diagnosis::DiscretizationCheck refit_on_control(const ControlRefit& r, const Fit
   return check;
 }
 
-std::vector<std::string> controls_that_ran(const Diagnosis& d) {
-  std::vector<std::string> out;
-  for (const Diagnosis::Control& k : d.controls)
-    if (!k.fit.failed && !k.fit.frame_costs.empty()) out.push_back(k.fit.name);
+std::vector<DiscretizationCheck> refit_on_controls(const FittedModel& m, const std::vector<std::string>& controls,
+                                                   const DiagnosisContext& c, const Scene& scene, double phi_max) {
+  const std::vector<ControlRefit> refits = control_refits(m, scene, controls);
+  std::vector<DiscretizationCheck> out(refits.size());
+  side_by_side(refits.size(), c.options.device, [&](size_t k, const std::string& device) {
+    out[k] = refit_on_control(refits[k], m, c, phi_max, device);
+  });
   return out;
 }
 
-void refit_cause_on_controls(Diagnosis& d, const DiagnosisContext& c, const Scene& scene, const FittedModel& m) {
-  const std::vector<ControlRefit> refits = control_refits(m, scene, controls_that_ran(d));
-  d.cause_on_controls.resize(refits.size());
-  side_by_side(refits.size(), c.options.device, [&](size_t k, const std::string& device) {
-    d.cause_on_controls[k] = refit_on_control(refits[k], m, c, d.base.problem.phi_max, device);
-  });
-}
-
-std::string likely_cause(const Diagnosis& d, const std::map<std::string, FittedModel>& shared_fits,
-                         const DiagnosisOptions& o) {
+std::string likely_cause(const FittedModel& base, int heldin_frames,
+                         const std::map<std::string, FittedModel>& shared_fits, const DiagnosisOptions& o) {
   std::string best;
   double best_gain = o.min_gain;
   for (const auto& [name, m] : shared_fits) {
-    if (m.failed || m.frame_costs.size() != d.base.frame_costs.size() || !m.spec) continue;
-    const double g = cost_gain(d.base.frame_costs, m.frame_costs, d.heldin_frames, -1, 1, o.seed).value;
+    if (m.failed || m.frame_costs.size() != base.frame_costs.size() || !m.spec) continue;
+    const double g = cost_gain(base.frame_costs, m.frame_costs, heldin_frames, -1, 1, o.seed).value;
     if (g > best_gain) best = name, best_gain = g;
   }
   return best;
 }
 
-void keep_early_refits(Diagnosis& d, const std::vector<Diagnosis::DiscretizationCheck>& early) {
-  for (const std::string& control : controls_that_ran(d))
-    for (const Diagnosis::DiscretizationCheck& check : early)
-      if (check.control == control) d.cause_on_controls.push_back(check);
+std::vector<DiscretizationCheck> checks_of(const std::vector<std::string>& controls,
+                                           const std::vector<DiscretizationCheck>& early) {
+  std::vector<DiscretizationCheck> out;
+  for (const std::string& control : controls)
+    for (const DiscretizationCheck& check : early)
+      if (check.control == control) out.push_back(check);
+  return out;
 }
 
-std::string control_check_line(const Diagnosis::DiscretizationCheck& g, const std::string& cause) {
+std::string control_check_line(const DiscretizationCheck& g, const std::string& cause) {
   const bool grid = g.control == "finer_grid";
   if (g.fit.failed) return fmt::format("the {} fit on {} failed: {}", cause, g.fit.proposal, g.fit.failure);
   if (g.moved.empty()) return fmt::format("on {}, the {} fit moves no parameter by 10 % or more", g.fit.proposal, cause);

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "models/diagnosis/diagnosis.h"
+#include "models/diagnosis/fitted_model.h"
 #include "models/diagnosis/model_fit.h"
 
 namespace ssc {
@@ -26,19 +26,19 @@ struct ControlRefit {
 std::vector<ControlRefit> control_refits(const FittedModel& m, const Scene& scene,
                                          const std::vector<std::string>& controls);
 // One refit from m's values, on `device`, with the cost threshold phi_max.
-Diagnosis::DiscretizationCheck refit_on_control(const ControlRefit& r, const FittedModel& m, const DiagnosisContext& c,
-                                                double phi_max, const std::string& device);
-// The controls that ran, in the order of discretization_controls().
-std::vector<std::string> controls_that_ran(const Diagnosis& d);
-// The cause m's refits on the controls that ran, side by side, into d.cause_on_controls.
-void refit_cause_on_controls(Diagnosis& d, const DiagnosisContext& c, const Scene& scene, const FittedModel& m);
-// The shared batch's candidate with the largest held-out gain over the base where it clears
-// the gain bar ("" where none does): the likely cause.
-std::string likely_cause(const Diagnosis& d, const std::map<std::string, FittedModel>& shared_fits,
-                         const DiagnosisOptions& o);
-// The refits run ahead, for the controls that ran, into d.cause_on_controls.
-void keep_early_refits(Diagnosis& d, const std::vector<Diagnosis::DiscretizationCheck>& early);
+DiscretizationCheck refit_on_control(const ControlRefit& r, const FittedModel& m, const DiagnosisContext& c,
+                                     double phi_max, const std::string& device);
+// The cause m's refits on the controls named, side by side.
+std::vector<DiscretizationCheck> refit_on_controls(const FittedModel& m, const std::vector<std::string>& controls,
+                                                   const DiagnosisContext& c, const Scene& scene, double phi_max);
+// Of the shared batch's fits, the one with the largest held-out gain over the base where it
+// clears the gain bar ("" where none does): the likely cause.
+std::string likely_cause(const FittedModel& base, int heldin_frames,
+                         const std::map<std::string, FittedModel>& shared_fits, const DiagnosisOptions& o);
+// Of the checks run ahead, those of the controls named, in their order.
+std::vector<DiscretizationCheck> checks_of(const std::vector<std::string>& controls,
+                                           const std::vector<DiscretizationCheck>& early);
 // The printed line of one check.
-std::string control_check_line(const Diagnosis::DiscretizationCheck& g, const std::string& cause);
+std::string control_check_line(const DiscretizationCheck& g, const std::string& cause);
 
 }  // namespace ssc

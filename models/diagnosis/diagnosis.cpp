@@ -425,6 +425,14 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
   }
 }
 
+// The controls that ran, in the order of discretization_controls().
+std::vector<std::string> controls_that_ran(const Diagnosis& d) {
+  std::vector<std::string> out;
+  for (const Diagnosis::Control& k : d.controls)
+    if (!k.fit.failed && !k.fit.frame_costs.empty()) out.push_back(k.fit.name);
+  return out;
+}
+
 // Step 5 (with no cause): candidates the data cannot tell from the base. Both gains, on the
 // held-in and on the held-out frames, have an interval containing 0 or are within 2 margins
 // of it, and the candidate moves a base parameter.
@@ -726,11 +734,12 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
 
   // The likely cause's refits on the controls' discretizations at the end of step 3's queue,
   // where its fits run side by side.
-  const std::string likely =
-      o.discretization_controls && fit_threads(c).size() > 1 ? likely_cause(d, shared_fits, o) : std::string();
+  const std::string likely = o.discretization_controls && fit_threads(c).size() > 1
+                                 ? likely_cause(d.base, d.heldin_frames, shared_fits, o)
+                                 : std::string();
   const std::vector<ControlRefit> early =
       likely.empty() ? std::vector<ControlRefit>{} : control_refits(shared_fits.at(likely), scene, discretization_controls());
-  std::vector<Diagnosis::DiscretizationCheck> early_checks(early.size());
+  std::vector<DiscretizationCheck> early_checks(early.size());
   std::vector<std::function<void(const std::string&)>> after;
   for (size_t k = 0; k < early.size(); ++k)
     after.push_back([&, k](const std::string& device) {
@@ -824,15 +833,15 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
       slices_failure = e.what();
     }
     if (m.name == d.cause && m.name == likely) {
-      keep_early_refits(d, early_checks);
+      d.cause_on_controls = checks_of(controls_that_ran(d), early_checks);
     } else if (m.name == d.cause) {
       say("the " + m.name + " fit on the controls' discretizations");
-      refit_cause_on_controls(d, c, scene, m);
+      d.cause_on_controls = refit_on_controls(m, controls_that_ran(d), c, scene, d.base.problem.phi_max);
     }
   }
   tell(d, o, named);
   if (!slices_failure.empty()) d.lines.push_back("the held-in cost along the cause's parameters failed: " + slices_failure);
-  for (const Diagnosis::DiscretizationCheck& g : d.cause_on_controls) d.lines.push_back(control_check_line(g, d.cause));
+  for (const DiscretizationCheck& g : d.cause_on_controls) d.lines.push_back(control_check_line(g, d.cause));
   d.seconds = seconds_since(t0);
   return d;
 }

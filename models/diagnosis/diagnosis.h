@@ -74,11 +74,6 @@ struct Diagnosis {
   // step), from its fit: the controls refit the base model only, and a cause's values can
   // depend on the discretization where the base's do not. Run where the cause is a physical
   // extension, for each control that ran, in the order of discretization_controls().
-  struct DiscretizationCheck {
-    std::string control;  // finer_grid or finer_step
-    FittedModel fit;      // failed with the reason where its fit failed
-    std::vector<std::tuple<std::string, double, double>> moved;  // by 10 % or more: (name, as fitted, there)
-  };
   std::vector<DiscretizationCheck> cause_on_controls;
   std::string cause = "none";
   // Physical candidates that passed beside a measurement cause: fitted to the frames as

@@ -119,7 +119,7 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   }
   j["discretization_controls"] = controls;
   for (const std::string& control : discretization_controls()) j["cause_on_" + control] = nullptr;
-  for (const Diagnosis::DiscretizationCheck& g : d.cause_on_controls) {
+  for (const DiscretizationCheck& g : d.cause_on_controls) {
     nlohmann::json c{{"what", g.fit.proposal}, {"fitted", !g.fit.failed}};
     if (g.fit.failed) {
       c["why_not"] = g.fit.failure;

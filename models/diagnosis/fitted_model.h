@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "models/sim/extensions.h"
@@ -67,6 +68,14 @@ struct FittedModel {
   std::shared_ptr<const ModelSpec> spec;  // what was fitted: the scene keys and parameters of its model
   double seconds = 0;
   int batches = 0;  // of simulations, of the fit this model was part of (ReconstructionResult::batches)
+};
+
+// A model refitted on a discretization control's discretization (half the cell size, half the
+// time step), from its fit.
+struct DiscretizationCheck {
+  std::string control;  // finer_grid or finer_step
+  FittedModel fit;      // failed with the reason where its fit failed
+  std::vector<std::tuple<std::string, double, double>> moved;  // by 10 % or more: (name, as fitted, there)
 };
 
 }  // namespace ssc
