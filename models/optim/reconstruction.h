@@ -56,7 +56,7 @@ struct ReconstructionOptions {
   // With initial_values: per start, the model it fits, where the models compete and only the
   // best is kept (`ssc diagnose`'s proposed planes, fitted as one batch). lm: a stalled start of
   // a model whose best cost is more than kCompetingMargin above the best model's does not go
-  // on (reconstruction.cpp, check_convergence_claims). Empty: one model.
+  // on (in_contention; reconstruction.cpp, fit_least_squares). Empty: one model.
   std::vector<int> competing_models;
   bool finite_differences = false;  // central differences instead of the adjoint (for comparison; not with lm)
   double fd_step = 1e-4;            // in the optimiser's internal coordinates (log space: 0.01 %); also lm's

@@ -138,9 +138,9 @@ def cases():
 
 # The independent set (tools/calculix/drops.sh): the case folder's effect, and how the fit's
 # scene is made from the truth's scene.json that drops.py writes (the effect taken out).
-# CalculiX's bodies are Neo-Hookean. At the clean drop's 15 % compression that differs from ssc's
-# corotated body by more than the depth noise (docs/diagnosis.md), so its effect is the material;
-# clean_gentle is the same drop at 6 %, where the two agree.
+# CalculiX's bodies are Neo-Hookean. At the clean drop's compression (10 % at the frames) that
+# differs from ssc's corotated body by more than the depth noise (docs/diagnosis.md), so its
+# effect is the material; clean_gentle is the same drop set down gently (4.9 %).
 CALCULIX_EFFECTS = {"clean_gentle": "none", "clean": "nonlinear_material", "clean_slide": "none",
                     "clean_brick": "none", "friction": "friction",
                     "friction_low": "friction", "two_materials": "two_materials", "second_plane": "second_plane",
