@@ -3,7 +3,7 @@
 switched on (two strengths) or none, partly with another discretisation than the fit's; each
 diagnosed by `ssc diagnose` from a scene without the effect. Prints a line per case and writes
 the results as JSON and as the Markdown table of docs/diagnosis.md (--json PATH, PATH.md)."""
-import argparse, concurrent.futures, copy, json, os, queue, shutil, subprocess, time
+import argparse, concurrent.futures, copy, json, os, queue, re, shutil, subprocess, time
 
 # Positions are off the grid planes by a few millimetres: a cube whose faces lie on grid planes
 # is, once it tumbles, rendered by `observe` where the cost does not find it (docs/diagnosis.md).
@@ -300,7 +300,8 @@ def main():
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--starts", type=int, default=8)        # ssc diagnose's defaults
     ap.add_argument("--iterations", type=int, default=30)
-    ap.add_argument("--only", default="", help="comma-separated parts of case names (NAME$: that case alone), run in this order")
+    ap.add_argument("--only", default="", help="comma-separated parts of case names (NAME$: that case alone), run in this "
+                    "order; a comma followed by a space is part of a name ('CalculiX clean_gentle, depths 2 %% too large$')")
     ap.add_argument("--json", default="")
     ap.add_argument("--timing", action="store_true", help="only the 360-step timing case")
     ap.add_argument("--calculix", default="", help="a tools/calculix/drops.sh output folder: diagnose its cases "
@@ -334,7 +335,7 @@ def main():
     def chosen(name, part):  # a part ending in $ names a case exactly
         return part and (name == part[:-1] if part.endswith("$") else part in name)
     if a.only:  # the cases --only names, in the order it names them
-        parts = a.only.split(",")
+        parts = re.split(r",(?! )", a.only)
         rank = {c["name"]: min((i for i, p in enumerate(parts) if chosen(c["name"], p)), default=None) for c in todo}
         todo = sorted((c for c in todo if rank[c["name"]] is not None), key=lambda c: rank[c["name"]])
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
