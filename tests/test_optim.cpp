@@ -1318,6 +1318,10 @@ TEST(ReconstructionLeastSquares, ConvergesToTheMinimumTheGradientOptimiserFinds)
     EXPECT_EQ(rec.stop_reason.rfind("converged: ", 0), 0u);
     EXPECT_LE(rec.iterations, 15);
     EXPECT_EQ(int(rec.cost_history.size()), rec.iterations + 1);
+    // A round for its first evaluation and for each accepted trial, more for rejected ones; no
+    // more rounds than the fit's batches.
+    EXPECT_GE(rec.rounds, rec.iterations + 1 + rec.restarts);
+    EXPECT_LE(rec.rounds, lm.batches);
     EXPECT_NEAR(rec.parameter_history[0][0], rec.initial[0], 1e-13 * rec.initial[0]);
     for (size_t k = 1; k < rec.cost_history.size(); ++k) EXPECT_LT(rec.cost_history[k], rec.cost_history[k - 1]);
     EXPECT_EQ(rec.final_cost, rec.cost_history.back());
