@@ -8,11 +8,15 @@
 //   - geometric multigrid V(nu, nu) cycles on the cell grid: coarse nodes every 2^l cells,
 //     trilinear prolongation P, Galerkin coarse matrices P^T A P, damped Jacobi smoothing and
 //     a direct solve on the coarsest level.
+// With --frozen, built once from the first file's matrix and used for every file instead:
+// its LDL^T factor, its scalar (per-component) factor, and two levels with its coarse factor;
+// with the solve and factorization times.
 // Each line gives the iterations and their cost in fine-grid operator applications (a CG
 // iteration 1, a V-cycle 2 nu + 1 on the finest level plus an eighth of that per level below).
-// Usage: ssc_preconditioner_study FILE... [--tol 1e-6]
+// Usage: ssc_preconditioner_study FILE... [--tol 1e-6] [--frozen]
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -223,9 +227,12 @@ struct Multigrid {
 int main(int argc, char** argv) {
   std::vector<std::string> files;
   double tol = 1e-6;
+  bool frozen = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--tol" && i + 1 < argc)
+    if (a == "--frozen")
+      frozen = true;
+    else if (a == "--tol" && i + 1 < argc)
       tol = std::atof(argv[++i]);
     else
       files.push_back(a);
@@ -233,6 +240,70 @@ int main(int argc, char** argv) {
   if (files.empty()) {
     std::fprintf(stderr, "usage: ssc_preconditioner_study FILE... [--tol 1e-6] (files from SSC_DUMP_NEWMARK_SYSTEM)\n");
     return 2;
+  }
+  if (frozen) {
+    // A factor of the first file's matrix as every file's preconditioner (one triangular pair a
+    // CG iteration): how far a factor built once carries over later steps' rotations and contact.
+    const System first = read_system(files[0]);
+    Eigen::SimplicialLDLT<Sparse> factor(first.A);
+    if (factor.info() != Eigen::Success) throw std::runtime_error("first matrix not factorised");
+    std::printf("factor of %s: %ld nonzeros in L (A: %ld)\n", files[0].c_str(), long(factor.matrixL().nestedExpression().nonZeros()),
+                long(first.A.nonZeros()));
+    // The same for a scalar matrix: the average of each node pair's three diagonal entries,
+    // factored once and solved per component (rotation-invariant: R (S x I3) R^T = S x I3).
+    const int nodes = first.nodes;
+    std::vector<Eigen::Triplet<double>> st;
+    for (int k = 0; k < first.A.outerSize(); ++k)
+      for (Sparse::InnerIterator e(first.A, k); e; ++e)
+        if (e.row() % 3 == e.col() % 3) st.emplace_back(int(e.row() / 3), int(e.col() / 3), e.value() / 3);
+    Sparse S(nodes, nodes);
+    S.setFromTriplets(st.begin(), st.end());
+    Eigen::SimplicialLDLT<Sparse> scalar(S);
+    std::printf("scalar factor: %ld nonzeros in L\n", long(scalar.matrixL().nestedExpression().nonZeros()));
+    auto componentwise = [&](const Vector& r) {
+      Vector z(r.size());
+      Vector c(nodes);
+      for (int d = 0; d < 3; ++d) {
+        for (int i = 0; i < nodes; ++i) c[i] = r[3 * i + d];
+        c = scalar.solve(c);
+        for (int i = 0; i < nodes; ++i) z[3 * i + d] = c[i];
+      }
+      return z;
+    };
+    auto seconds = [](const std::function<void()>& f) {
+      const auto t0 = std::chrono::steady_clock::now();
+      for (int k = 0; k < 50; ++k) f();
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / 50;
+    };
+    Vector probe = Vector::Ones(3 * nodes);
+    std::printf("a factorization: full %.1f ms, scalar %.2f ms\n", 1e3 * seconds([&] { factor.compute(first.A); }),
+                1e3 * seconds([&] { scalar.compute(S); }));
+    std::printf("a solve: full %.3f ms, componentwise %.3f ms, an A product %.3f ms\n",
+                1e3 * seconds([&] { probe = factor.solve(probe).normalized(); }),
+                1e3 * seconds([&] { probe = componentwise(probe).normalized(); }),
+                1e3 * seconds([&] { probe = (first.A * probe).normalized(); }));
+    // Two levels whose coarse factor is the first file's (P^T A P factored once); the fine
+    // level's smoothing and residuals use each file's own matrix.
+    Multigrid two_level(first, 1, 0.7, 3000);
+    std::printf("two levels: %ld coarse unknowns; a coarse solve %.3f ms\n", long(two_level.levels.back().A.rows()),
+                1e3 * seconds([&] {
+                  Vector c = Vector::Ones(two_level.levels.back().A.rows());
+                  c = two_level.levels.back().direct->solve(c);
+                }));
+    for (const std::string& f : files) {
+      const System s = read_system(f);
+      const Vector inv_diag = s.A.diagonal().cwiseInverse();
+      two_level.levels[0].A = s.A;
+      two_level.levels[0].inv_diag = inv_diag;
+      std::printf("%s: two levels V(1,1), the first file's coarse factor: %d; ", f.c_str(),
+                  pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return two_level.cycle(0, r); }, tol, 2000));
+      const int cw = pcg(s.A, s.rhs, s.guess, componentwise, tol, 2000);
+      std::printf("%s: componentwise %d; ", f.c_str(), cw);
+      const int jacobi = pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return Vector(inv_diag.cwiseProduct(r)); }, tol, 2000);
+      const int it = pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return Vector(factor.solve(r)); }, tol, 2000);
+      std::printf("%s: Jacobi %d iterations; the first file's factor %d\n", f.c_str(), jacobi, it);
+    }
+    return 0;
   }
   for (const std::string& f : files) {
     const System s = read_system(f);
