@@ -217,10 +217,10 @@ double schedule_weight(const std::string& name) {
   return 1;
 }
 
-// A refit of the likely cause on a control's discretization starts from its fitted values:
-// dearer than a measurement correction, cheaper than a fit from the starts. On the timing
-// case the two took 12 and 18 s against the second plane's 62 s (one H200, 4 fits a GPU).
-constexpr double kEarlyRefitWeight = 1;
+// A refit of the likely cause on a control's discretization runs one start from its fitted
+// values where the control's own fit runs nine: on the timing case about 12 and 27 s against
+// 22 and 37 s (one H200, four fits a GPU), so about this share of the control's weight.
+constexpr double kEarlyRefitShare = 0.6;
 
 // The GPUs of step 3's fits, one entry a thread: kFitsPerGpu per GPU (SSC_FITS_PER_GPU=N: N),
 // the GPUs taking turns, so that the costliest fits start on different GPUs. Empty on the CPU
@@ -237,7 +237,7 @@ std::vector<int> fit_threads(const DiagnosisContext& c) {
 
 // Step 3 for every candidate the shared batch did not fit, in `order`, and the
 // discretization controls where asked for, and the jobs of `after` (each given its device,
-// weighed as kEarlyRefitWeight), the costliest first. On the GPU (with one rank) the jobs run
+// weighed by `after_weights`), the costliest first. On the GPU (with one rank) the jobs run
 // side by side, a thread of fit_threads() each taking the next one; a fit's result does not
 // depend on which GPU ran it or what ran beside it. A skipped fit's reason goes to `skipped`.
 std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const DiagnosisContext& c, const Scene& scene,
@@ -246,7 +246,8 @@ std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const Diagnos
                                                std::vector<std::map<std::string, double>>& base_starts,
                                                std::map<std::string, std::string>& skipped,
                                                const std::function<void(const std::string&)>& say,
-                                               const std::vector<std::function<void(const std::string&)>>& after) {
+                                               const std::vector<std::function<void(const std::string&)>>& after,
+                                               const std::vector<double>& after_weights) {
   std::vector<std::string> names;
   if (c.options.discretization_controls)
     for (const std::string& control : discretization_controls()) names.push_back(control);
@@ -270,7 +271,7 @@ std::map<std::string, FittedModel> fit_own_all(const Diagnosis& d, const Diagnos
   // Jobs 0 .. names.size() - 1 are the fits, the rest those of `after`.
   std::vector<size_t> jobs(names.size() + after.size());
   for (size_t k = 0; k < jobs.size(); ++k) jobs[k] = k;
-  auto weight = [&](size_t k) { return k < names.size() ? schedule_weight(names[k]) : kEarlyRefitWeight; };
+  auto weight = [&](size_t k) { return k < names.size() ? schedule_weight(names[k]) : after_weights[k - names.size()]; };
   std::stable_sort(jobs.begin(), jobs.end(), [&](size_t a, size_t b) { return weight(a) > weight(b); });
   auto job = [&](size_t k, const DiagnosisContext& on) {
     if (k < names.size())
@@ -747,19 +748,22 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
       likely.empty() ? std::vector<ControlRefit>{} : control_refits(shared_fits.at(likely), scene, discretization_controls());
   std::vector<DiscretizationCheck> early_checks(early.size());
   std::vector<std::function<void(const std::string&)>> after;
-  for (size_t k = 0; k < early.size(); ++k)
+  std::vector<double> after_weights;
+  for (size_t k = 0; k < early.size(); ++k) {
+    after_weights.push_back(kEarlyRefitShare * schedule_weight(early[k].control));
     after.push_back([&, k](const std::string& device) {
       say("fitting " + early[k].spec.name + " ahead (the likely cause)");
       early_checks[k] = refit_on_control(early[k], shared_fits.at(likely), c, d.base.problem.phi_max, device);
       say(early[k].spec.name + " done");
     });
+  }
   // Steps 2 and 3 at once on the GPU where one process runs alone (MPI needs its calls on this
   // thread; on the CPU the two would share the cores): the score test only orders the verdicts.
   std::map<std::string, FittedModel> own_fits;
   std::exception_ptr own_failure;
   auto fit_own_candidates = [&] {
     try {
-      own_fits = fit_own_all(d, c, scene, o.candidates, shared_fits, base_starts, skipped, say, after);
+      own_fits = fit_own_all(d, c, scene, o.candidates, shared_fits, base_starts, skipped, say, after, after_weights);
     } catch (...) {
       own_failure = std::current_exception();
     }
