@@ -140,6 +140,11 @@ CASES = {
              "the soft third x < -h/3 and the stiff two thirds)",
         E=5e4, E_half=4e5, planes=[(TILT, 0.0, 0.0, None)], gap=0.04, velocity=(0.3, -1.5, 0.0),
         duration=0.35),
+    "two_materials_gentle": dict(
+        what="the gentle drop (clean_gentle) with the body of two_materials: one hidden effect, where the drop "
+             "at 1.5 m/s also compresses the body to where its Neo-Hookean material shows",
+        E=5e4, E_half=4e5, planes=[(TILT, 0.0, 0.0, None)], gap=0.02, velocity=(0.3, -0.5, 0.0),
+        duration=0.35),
     "friction": dict(
         what="the clean slide with Coulomb friction mu = 0.5, started resting on the incline (pressed in by its "
              "static 0.01 mm: a drop of 2 mm made ccx cut back to failure; 0.2 s, as ccx's increments fall to 0.2 ms "

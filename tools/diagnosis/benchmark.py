@@ -140,10 +140,13 @@ def cases():
 # scene is made from the truth's scene.json that drops.py writes (the effect taken out).
 # CalculiX's bodies are Neo-Hookean. At the clean drop's compression (10 % at the frames) that
 # differs from ssc's corotated body by more than the depth noise (docs/diagnosis.md), so its
-# effect is the material; clean_gentle is the same drop set down gently (4.9 %).
+# effect is the material; clean_gentle is the same drop set down gently (4.9 %). two_materials
+# is that drop with a body of two materials, so it holds the material as a second effect;
+# two_materials_gentle is the gentle drop with the same body.
 CALCULIX_EFFECTS = {"clean_gentle": "none", "clean": "nonlinear_material", "clean_slide": "none",
                     "clean_brick": "none", "friction": "friction",
-                    "friction_low": "friction", "two_materials": "two_materials", "second_plane": "second_plane",
+                    "friction_low": "friction", "two_materials": "two_materials",
+                    "two_materials_gentle": "two_materials", "second_plane": "second_plane",
                     "floor_below": "second_plane", "cylinder_wall": "second_plane", "cylinder": "none",
                     "neo_hookean": "nonlinear_material"}
 
