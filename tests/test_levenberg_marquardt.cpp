@@ -87,6 +87,50 @@ TEST(LevenbergMarquardt, RosenbrockResidualsConverge) {
   EXPECT_LE(lm.iterations(), 40);
 }
 
+TEST(LevenbergMarquardt, TrialsOfRejectionsAheadTakeTheSameStepsInFewerRounds) {
+  // Rosenbrock from (-1.2, 1) rejects some trials. Driven with the trials of up to two more
+  // rejections evaluated in the same round as each trial (lookahead, tell_in_order), the
+  // optimiser takes the same accepted steps, bit for bit, in fewer rounds.
+  const Residuals f = [](const Vec& z) { return vec({1 - z[0], 10 * (z[1] - z[0] * z[0])}); };
+  LevenbergMarquardt plain(vec({-1.2, 1}), OptimizerOptions{}, 1e-7);
+  std::vector<Vec> plain_path;
+  int plain_rounds = 0, rejected = 0;
+  while (!plain.done() && plain_rounds < 10000) {
+    std::vector<ResidualVector> values;
+    for (const Vec& z : plain.ask()) values.push_back({f(z), {}});
+    plain.tell(values);
+    ++plain_rounds;
+    if (plain.accepted()) plain_path.push_back(plain.best_point());
+    else ++rejected;
+  }
+  LevenbergMarquardt ahead(vec({-1.2, 1}), OptimizerOptions{}, 1e-7);
+  std::vector<Vec> ahead_path;
+  int ahead_rounds = 0, told_ahead = 0;
+  while (!ahead.done() && ahead_rounds < 10000) {
+    std::vector<Vec> trials = {ahead.ask()[0]};
+    for (const Vec& z : ahead.lookahead(2)) trials.push_back(z);
+    std::vector<std::vector<ResidualVector>> groups;
+    for (const Vec& trial : trials) {
+      groups.emplace_back();
+      for (const Vec& z : ahead.points_for(trial)) groups.back().push_back({f(z), {}});
+    }
+    const int taken = ahead.tell_in_order(groups, std::vector<std::string>(trials.size()), trials);
+    ++ahead_rounds;
+    told_ahead += taken > 0;
+    if (taken >= 0) ahead_path.push_back(ahead.best_point());
+  }
+  std::printf("rosenbrock: %d rounds (%d rejected trials) one trial a round, %d with two trials ahead (%d accepted "
+              "from ahead)\n", plain_rounds, rejected, ahead_rounds, told_ahead);
+  ASSERT_GE(rejected, 2);
+  EXPECT_EQ(ahead.stop_reason(), plain.stop_reason());
+  EXPECT_EQ(ahead.iterations(), plain.iterations());
+  ASSERT_EQ(ahead_path.size(), plain_path.size());
+  for (size_t k = 0; k < plain_path.size(); ++k) EXPECT_EQ(ahead_path[k], plain_path[k]) << "step " << k;
+  EXPECT_EQ(ahead.best_cost(), plain.best_cost());
+  EXPECT_GT(told_ahead, 0);
+  EXPECT_LT(ahead_rounds, plain_rounds);
+}
+
 TEST(LevenbergMarquardt, TheSecantTermLengthensTheStepsOfALargeResidualFit) {
   // The point (A cos z, A sin z) on a circle of radius A = 10, as near as it gets to (0, b), b = 0.5:
   // r = (A cos z, A sin z - b), the minimum at z = pi / 2 with the residual A - b, far from 0.

@@ -1335,6 +1335,41 @@ TEST(ReconstructionLeastSquares, ConvergesToTheMinimumTheGradientOptimiserFinds)
   EXPECT_NEAR(lm.starts[size_t(lm.best)].final[0], kTrueYoungsModulus, 0.02 * kTrueYoungsModulus);
 }
 
+TEST(ReconstructionLeastSquares, TrialsAheadInASparedBatchGiveTheSameFit) {
+  // lm with the trials of up to two more rejections in the room the stopped starts leave in a
+  // round (ReconstructionOptions::lm_lookahead, the GPU's default) against one trial a round:
+  // every start takes the same steps to the same stop, bit for bit, in no more rounds. (This
+  // smooth fit rejects no trial, so the trials ahead are all spare; that they save rounds
+  // where trials are rejected is LevenbergMarquardt.TrialsOfRejectionsAheadTakeTheSameSteps...)
+  const Problem& problem = sphere_problem();
+  ReconstructionOptions o;
+  o.fit = {"youngs_modulus", "mass_damping"};
+  o.starts = 4;
+  o.seed = 1;
+  o.optimizer = "lm";
+  o.optimizer_options.max_iterations = 30;
+  o.lm_lookahead = 0;
+  const ReconstructionResult one = reconstruct(problem, o);
+  o.lm_lookahead = 2;
+  const ReconstructionResult ahead = reconstruct(problem, o);
+  std::printf("one trial a round: %d batches, %d simulations; two ahead: %d batches, %d simulations\n", one.batches,
+              one.evaluations, ahead.batches, ahead.evaluations);
+  ASSERT_EQ(one.starts.size(), ahead.starts.size());
+  for (size_t s = 0; s < one.starts.size(); ++s) {
+    const StartRecord &a = one.starts[s], &b = ahead.starts[s];
+    ASSERT_FALSE(a.failed) << a.failure;
+    EXPECT_EQ(b.stop_reason, a.stop_reason);
+    EXPECT_EQ(b.iterations, a.iterations);
+    EXPECT_EQ(b.final, a.final);
+    EXPECT_EQ(b.cost_history, a.cost_history);
+    EXPECT_EQ(b.parameter_history, a.parameter_history);
+    EXPECT_LE(b.rounds, a.rounds);
+  }
+  EXPECT_EQ(ahead.best, one.best);
+  EXPECT_LE(ahead.batches, one.batches);
+  EXPECT_GT(ahead.evaluations, one.evaluations);  // the trials ahead were evaluated
+}
+
 TEST(ReconstructionLeastSquares, BoundsHoldAndAStartOnABoundMoves) {
   // E bounded to [1e4, 4e4] Pa (the truth, 2e4, inside): starts on both bounds begin 2 % of
   // the log range inside them, and lm converges from both to one value near the truth (the

@@ -59,8 +59,8 @@ double LevenbergMarquardt::projected_gradient_norm() const {
   return std::sqrt(sum);
 }
 
-std::vector<Eigen::VectorXd> LevenbergMarquardt::ask() const {
-  std::vector<Eigen::VectorXd> points(size_t(z_.size()) + 1, trial_);
+std::vector<Eigen::VectorXd> LevenbergMarquardt::points_for(const Eigen::VectorXd& trial) const {
+  std::vector<Eigen::VectorXd> points(size_t(z_.size()) + 1, trial);
   for (Eigen::Index j = 0; j < z_.size(); ++j) points[size_t(j) + 1][j] += h_;
   return points;
 }
@@ -116,6 +116,28 @@ void LevenbergMarquardt::tell(const std::vector<ResidualVector>& values, const s
     nu_ *= 2;
   }
   if (!done()) propose();
+}
+
+std::vector<Eigen::VectorXd> LevenbergMarquardt::lookahead(int extra) const {
+  std::vector<Eigen::VectorXd> out;
+  if (!started_ || done()) return out;
+  LevenbergMarquardt next = *this;
+  for (int k = 0; k < extra; ++k) {
+    next.tell({}, "lookahead: a rejected trial");  // a rejection; its cost does not shape the next step
+    if (next.done()) break;
+    out.push_back(next.trial_);
+  }
+  return out;
+}
+
+int LevenbergMarquardt::tell_in_order(const std::vector<std::vector<ResidualVector>>& groups,
+                                      const std::vector<std::string>& failures, const std::vector<Eigen::VectorXd>& trials) {
+  for (size_t k = 0; k < groups.size(); ++k) {
+    if (done() || (k > 0 && trial_ != trials[k])) break;
+    tell(groups[k], failures[k]);
+    if (accepted_) return int(k);
+  }
+  return -1;
 }
 
 void LevenbergMarquardt::take(const std::vector<ResidualVector>& values) {

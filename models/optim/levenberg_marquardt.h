@@ -52,6 +52,13 @@
 // criterion in the form of a cost change; on ssc's fits it stops the iterations that went on
 // lowering J by 1e-6 of itself until the iteration limit.
 //
+// Lookahead: a rejected trial is followed by a shorter step from the same point, and after a
+// rejection the next step does not depend on the rejected cost (the model falls back to
+// Gauss-Newton, the damping rises by nu). So the trials after 1, 2, ... rejections in a row are
+// known in advance (lookahead()), and a driver whose batches have room can evaluate them in the
+// same round and tell them in order until one is accepted: the same steps in fewer rounds
+// (tell_in_order()).
+//
 // Bounds (a projected step): an axis marked bounded runs its parameter through a sigmoid, so the
 // bound itself lies at z = +-infinity and a fit that wants a value beyond it would creep there
 // until the iteration limit. Such an axis is held once it is saturated (|z| >= kSaturated: the
@@ -81,10 +88,22 @@ class LevenbergMarquardt {
                      std::vector<char> bounded = {});
   static constexpr double kSaturated = 6.9;  // sigmoid(6.9) = 1 - 1.0e-3
   // The points to evaluate next: the trial point, then trial + fd_step e_j, j = 0..n-1.
-  std::vector<Eigen::VectorXd> ask() const;
+  std::vector<Eigen::VectorXd> ask() const { return points_for(trial_); }
+  // A trial point and its forward-difference probes, as ask() gives them.
+  std::vector<Eigen::VectorXd> points_for(const Eigen::VectorXd& trial) const;
   // Their residual vectors, in that order; `failure` non-empty when any of them failed (the
   // residuals are then not read).
   void tell(const std::vector<ResidualVector>& values, const std::string& failure = "");
+
+  // The trial points (internal coordinates) this start would ask for after 1..extra rejections
+  // in a row from now; fewer where it would stop first.
+  std::vector<Eigen::VectorXd> lookahead(int extra) const;
+  // Tells each group of values (each the residual vectors of a trial and its probes, in ask()'s
+  // order; `trials[k]` the trial point they were asked for) in order while the trials are
+  // rejected and each next one is the point this start then asks for. Returns the index of the
+  // group whose trial was accepted, or -1; the groups after a stop or a mismatch are not told.
+  int tell_in_order(const std::vector<std::vector<ResidualVector>>& groups, const std::vector<std::string>& failures,
+                    const std::vector<Eigen::VectorXd>& trials);
 
   bool done() const { return !reason_.empty(); }
   bool converged() const { return reason_.rfind("converged", 0) == 0; }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <numeric>
@@ -15,6 +16,7 @@
 #include "models/optim/batch_evaluation.h"
 #include "models/optim/levenberg_marquardt.h"
 #include "models/optim/surface_residuals.h"
+#include "models/sim/compute_device.h"
 #include "models/sim/parameters.h"
 
 namespace ssc {
@@ -231,24 +233,60 @@ std::vector<int> check_convergence_claims(const PhysicalParameters& base, const 
   return stalled;
 }
 
+// ReconstructionOptions::lm_lookahead, where -1 takes SSC_LM_LOOKAHEAD=N if set (docs/cli.md).
+int lm_lookahead(const ReconstructionOptions& o) {
+  if (o.lm_lookahead >= 0) return o.lm_lookahead;
+  if (const char* env = std::getenv("SSC_LM_LOOKAHEAD")) return std::max(0, std::atoi(env));
+  return runs_on_gpu(o.device) ? kGpuLookahead : 0;
+}
+
 // Levenberg-Marquardt starts (levenberg_marquardt.h): each round, every running start's trial
 // point and its probes, n + 1 points per start, as one batch of forward simulations whose
-// residual vectors are taken at the observed frames; until every start is done.
+// residual vectors are taken at the observed frames; until every start is done. Where the batch
+// is narrower than the pass's first round (starts have stopped), a start also brings the trials
+// of up to `lookahead` more rejections, with their probes, those whose last trial was rejected
+// first: on the GPU a round costs about the same however few points it holds, and the steps
+// are the same.
 void run_rounds(std::vector<LevenbergMarquardt>& lm, const SurfaceResiduals& residuals, const ReconstructionOptions& o,
                 const PhysicalParameters& base, const SurfaceConstraintCost& cost, BatchSimulations& sims,
                 const std::vector<StartSpace>& spaces, ReconstructionResult& result,
                 const ReconstructionProgress& progress, int& round) {
   const int S = int(spaces.size());
+  const int lookahead = lm_lookahead(o);
+  size_t width = 0;  // the pass's first round
+  std::vector<char> rejected(size_t(S), 0);
   for (;; ++round) {
     std::vector<int> active;
     for (int s = 0; s < S; ++s)
       if (!lm[s].done()) active.push_back(s);
     if (active.empty()) return;
+    // Per active start, its trials (internal coordinates): the one asked, then the lookahead's.
+    std::vector<std::vector<Eigen::VectorXd>> trials(active.size());
+    size_t points_asked = 0;
+    for (size_t k = 0; k < active.size(); ++k) {
+      trials[k].push_back(lm[active[k]].ask()[0]);
+      points_asked += size_t(spaces[active[k]].space().size()) + 1;
+    }
+    if (width == 0) width = points_asked;
+    for (const bool after_rejection : {true, false})  // where the batch has room: rejected starts first
+      for (size_t k = 0; k < active.size() && lookahead > 0; ++k) {
+        const int s = active[k];
+        if (bool(rejected[size_t(s)]) != after_rejection) continue;
+        const size_t per = size_t(spaces[s].space().size()) + 1;
+        for (const Eigen::VectorXd& z : lm[s].lookahead(lookahead)) {
+          if (points_asked + per > width) break;
+          trials[k].push_back(z);
+          points_asked += per;
+        }
+      }
     std::vector<Eigen::VectorXd> points;
-    std::vector<size_t> first;
-    for (int s : active) {
-      first.push_back(points.size());
-      for (const Eigen::VectorXd& z : lm[s].ask()) points.push_back(spaces[s].to_physical(z));
+    std::vector<std::vector<size_t>> first(active.size());  // per start, per trial: its index in points
+    for (size_t k = 0; k < active.size(); ++k) {
+      const int s = active[k];
+      for (const Eigen::VectorXd& trial : trials[k]) {
+        first[k].push_back(points.size());
+        for (const Eigen::VectorXd& z : lm[s].points_for(trial)) points.push_back(spaces[s].to_physical(z));
+      }
     }
     std::vector<PointEvaluation> e =
         evaluate_batch(sims, cost, base, result.names, points, false, &residuals, o.evaluation_progress);
@@ -257,16 +295,19 @@ void run_rounds(std::vector<LevenbergMarquardt>& lm, const SurfaceResiduals& res
     for (size_t k = 0; k < active.size(); ++k) {
       const int s = active[k];
       ++result.starts[s].rounds;
-      const size_t n = size_t(spaces[s].space().size()) + 1, a = first[k];
-      std::string failure;
-      std::vector<ResidualVector> r;
-      for (size_t i = a; i < a + n; ++i) {
-        if (!e[i].ok && failure.empty()) failure = e[i].failure;
-        r.push_back(std::move(e[i].residuals));
-      }
-      lm[s].tell(r, failure);
+      const size_t n = size_t(spaces[s].space().size()) + 1;
+      std::vector<std::vector<ResidualVector>> groups(trials[k].size());
+      std::vector<std::string> failures(trials[k].size());
+      for (size_t t = 0; t < trials[k].size(); ++t)
+        for (size_t i = first[k][t]; i < first[k][t] + n; ++i) {
+          if (!e[i].ok && failures[t].empty()) failures[t] = e[i].failure;
+          groups[t].push_back(std::move(e[i].residuals));
+        }
+      const int taken = lm[s].tell_in_order(groups, failures, trials[k]);
+      rejected[size_t(s)] = taken < 0;
+      if (taken < 0) continue;
+      const size_t a = first[k][size_t(taken)];
       StartRecord& rec = result.starts[s];
-      if (!lm[s].accepted()) continue;
       rec.cost_history.push_back(lm[s].best_cost());
       rec.parameter_history.push_back(points[a]);
       rec.frames = e[a].value.frames;
