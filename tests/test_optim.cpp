@@ -1337,7 +1337,7 @@ TEST(ReconstructionLeastSquares, ConvergesToTheMinimumTheGradientOptimiserFinds)
 
 TEST(ReconstructionLeastSquares, TrialsAheadInASparedBatchGiveTheSameFit) {
   // lm with the trials of up to two more rejections in the room the stopped starts leave in a
-  // round (ReconstructionOptions::lm_lookahead, the GPU's default) against one trial a round:
+  // round (ReconstructionOptions::lm_lookahead, meant for the GPU) against one trial a round:
   // every start takes the same steps to the same stop, bit for bit, in no more rounds. (This
   // smooth fit rejects no trial, so the trials ahead are all spare; that they save rounds
   // where trials are rejected is LevenbergMarquardt.TrialsOfRejectionsAheadTakeTheSameSteps...)

@@ -16,7 +16,6 @@
 #include "models/optim/batch_evaluation.h"
 #include "models/optim/levenberg_marquardt.h"
 #include "models/optim/surface_residuals.h"
-#include "models/sim/compute_device.h"
 #include "models/sim/parameters.h"
 
 namespace ssc {
@@ -236,8 +235,8 @@ std::vector<int> check_convergence_claims(const PhysicalParameters& base, const 
 // ReconstructionOptions::lm_lookahead, where -1 takes SSC_LM_LOOKAHEAD=N if set (docs/cli.md).
 int lm_lookahead(const ReconstructionOptions& o) {
   if (o.lm_lookahead >= 0) return o.lm_lookahead;
-  if (const char* env = std::getenv("SSC_LM_LOOKAHEAD")) return std::max(0, std::atoi(env));
-  return runs_on_gpu(o.device) ? kGpuLookahead : 0;
+  const char* env = std::getenv("SSC_LM_LOOKAHEAD");
+  return env ? std::max(0, std::atoi(env)) : 0;
 }
 
 // Levenberg-Marquardt starts (levenberg_marquardt.h): each round, every running start's trial

@@ -61,9 +61,10 @@ struct ReconstructionOptions {
   bool finite_differences = false;  // central differences instead of the adjoint (for comparison; not with lm)
   double fd_step = 1e-4;            // in the optimiser's internal coordinates (log space: 0.01 %); also lm's
   std::string device = "cpu";       // "cuda" or "cuda:K": on the GPUs (models/sim/compute_device.h)
-  // lm: the trials of up to this many more rejections evaluated with a rejected start's next one
-  // (reconstruction.cpp, run_rounds); -1: SSC_LM_LOOKAHEAD=N where set, else kGpuLookahead on
-  // the GPU and 0 on the CPU, whose rounds cost what they hold.
+  // lm: the trials of up to this many more rejections evaluated with each trial where a round
+  // has room (reconstruction.cpp, run_rounds); -1: SSC_LM_LOOKAHEAD=N where set, else 0. Meant
+  // for the GPU, where a round costs about what its longest simulation does; not yet measured
+  // there, so off by default.
   int lm_lookahead = -1;
   // Within a round: the steps done of the batch evaluation running and their total (forward,
   // and backward with the gradient), for progress on long rounds; may be empty.
@@ -114,10 +115,6 @@ void check_optimizer_name(const std::string& name);
 
 ReconstructionResult reconstruct(const Problem& problem, const ReconstructionOptions& options,
                                  const ReconstructionProgress& progress = {});
-
-// lm on the GPU: the trials of up to this many more rejections come with a rejected start's
-// next trial (ReconstructionOptions::lm_lookahead).
-constexpr int kGpuLookahead = 2;
 
 // For competing models (ReconstructionOptions::competing_models: start -> model) and each
 // start's cost: whether the start's model is still in contention, its best cost within
