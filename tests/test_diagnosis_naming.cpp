@@ -113,5 +113,24 @@ TEST(DiagnosisNaming, AMeasurementIsTheCauseBeforeAnyPhysicalCandidate) {
   EXPECT_TRUE(unjudged.empty());
 }
 
+TEST(DiagnosisNaming, AConfoundedPairSaysWhichBaseValuesDifferBetweenItsFits) {
+  // The gentle two-material drop at a reduced budget (docs/diagnosis.md, session 29): the two
+  // fits predict alike, with moduli 57.0 and 149.6 kPa; the mass damping is within 10 %.
+  FittedModel sharp, smooth;
+  sharp.name = "two_materials", smooth.name = "heterogeneous_stiffness";
+  sharp.names = {"youngs_modulus", "mass_damping", "material.regions[0].youngs_modulus"};
+  sharp.values = Eigen::Vector3d(57041.6, 0.100, 310747.6);
+  smooth.names = {"youngs_modulus", "mass_damping", "material.stiffness_gradient.x"};
+  smooth.values = Eigen::Vector3d(149574.5, 0.105, 15.6);
+  const std::string line = confounded_line(sharp, smooth);
+  EXPECT_EQ(line.rfind("two_materials or heterogeneous_stiffness: indistinguishable with this data; youngs_modulus ", 0), 0u)
+      << line;
+  EXPECT_NE(line.find(" with two_materials, "), std::string::npos) << line;
+  EXPECT_NE(line.find(" with heterogeneous_stiffness: these data cannot tell which"), std::string::npos) << line;
+  EXPECT_EQ(line.find("mass_damping"), std::string::npos) << line;
+  smooth.values[0] = 60000;  // within 10 %: nothing to tell apart
+  EXPECT_EQ(confounded_line(sharp, smooth), "two_materials or heterogeneous_stiffness: indistinguishable with this data");
+}
+
 }  // namespace
 }  // namespace ssc

@@ -631,7 +631,10 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
     if (!d.verdicts[i].implausible.empty() && d.verdicts[i].gain >= o.min_gain)
       d.lines.push_back(fmt::format("{} would remove {} of the held-out residual but is not named: its fit needs {}",
                                     d.verdicts[i].name, percent(d.verdicts[i].gain), d.verdicts[i].implausible[0]));
-  for (const auto& [a, b] : d.confounded) d.lines.push_back(fmt::format("{} or {}: indistinguishable with this data", a, b));
+  auto candidate = [&](const std::string& name) -> const FittedModel& {
+    return *std::find_if(d.candidates.begin(), d.candidates.end(), [&](const FittedModel& m) { return m.name == name; });
+  };
+  for (const auto& [a, b] : d.confounded) d.lines.push_back(confounded_line(candidate(a), candidate(b)));
   for (const auto& [candidate, what] : d.undecided)
     d.lines.push_back(fmt::format("{}; these data cannot tell which ({} fits the held-in and the held-out frames as well "
                                   "as the base model)",

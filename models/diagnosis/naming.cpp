@@ -1,8 +1,11 @@
 // The naming rule of `ssc diagnose` (see naming.h).
 #include "models/diagnosis/naming.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
 
+#include "models/diagnosis/model_fit.h"
 #include "models/sim/extensions.h"
 
 namespace ssc {
@@ -64,6 +67,15 @@ bool prefer_the_simplest(std::vector<size_t>& named, const std::vector<Candidate
   if (best == 0) return false;
   std::rotate(named.begin(), named.begin() + std::ptrdiff_t(best), named.begin() + std::ptrdiff_t(best) + 1);
   return true;
+}
+
+std::string confounded_line(const FittedModel& a, const FittedModel& b) {
+  std::string line = fmt::format("{} or {}: indistinguishable with this data", a.name, b.name);
+  std::string values;
+  for (const auto& [name, with_a, with_b] : moved_base(a, b))
+    values += fmt::format("{}{} {} with {}, {} with {}", values.empty() ? "" : "; ", name, with_unit(name, with_a), a.name,
+                          with_unit(name, with_b), b.name);
+  return values.empty() ? line : line + "; " + values + ": these data cannot tell which";
 }
 
 }  // namespace ssc

@@ -319,7 +319,20 @@ std::string candidates_html(const json& data) {
       std::string names;
       for (size_t i = 0; i < group.size(); ++i)
         names += (i == 0 ? "" : i + 1 == group.size() ? " or " : ", ") + ("<b>" + format_value(group[i]) + "</b>");
-      html += fmt::format("<li>{}, indistinguishable with this data</li>\n", names);
+      std::string values;  // the base parameters the pair's fits differ in (diagnosis.json's confounded_base)
+      const json& differ = member(data, "confounded_base");
+      const json& units = member(member(data, "parameters"), "units");
+      if (group.size() == 2 && differ.is_array())
+        for (const json& e : differ) {
+          const std::vector<double> v = numbers_at(e, "values");
+          if (member(e, "models") != group || v.size() != 2) continue;
+          const std::string name = text_at(e, "parameter"), unit = text_at(units, name.c_str());
+          auto value = [&](double x) { return format_number(x) + (unit.empty() ? "" : " " + escape_html(unit)); };
+          values += fmt::format("{}{} {} with {}, {} with {}", values.empty() ? "" : "; ", escape_html(name), value(v[0]),
+                                format_value(group[0]), value(v[1]), format_value(group[1]));
+        }
+      html += fmt::format("<li>{}, indistinguishable with this data{}</li>\n", names,
+                          values.empty() ? "" : "; " + values + ": these data cannot tell which");
     }
     html += "</ul>\n";
   }

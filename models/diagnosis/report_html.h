@@ -8,7 +8,8 @@
 //   title, cause, summary_lines[], provenance{scene, observations, command, version, device, date}
 //   candidates[]{name, extra_parameters{}, heldout_before, heldout_after, gain, gain_low, gain_high,
 //                placebo_gain, score, passes, base_before{}, base_after{}, warnings[]}
-//   confounded[][name, name], parameters{units{}, base{}, winner{}}
+//   confounded[][name, name], confounded_base[]{models[name, name], parameter, values[2]},
+//   parameters{units{}, base{}, winner{}}
 //   residual_vs_time{time[], before_mm[], after_mm[], heldout_from, contact_times[]}
 //   residual_images[]{camera, frame, time, width, height, before_mm[W*H], after_mm[W*H]}  (row-major)
 //   rest_shape{points[][x, y, z], before_mm[], after_mm[]}

@@ -58,6 +58,7 @@ nlohmann::json report_data(const Diagnosis& d, const nlohmann::json& dj, const s
   data["provenance"] = {{"scene", scene}, {"observations", observations}, {"device", device}};
   data["candidates"] = dj["candidates"];
   data["confounded"] = dj["confounded"];
+  data["confounded_base"] = dj["confounded_base"];
   data["discretization_controls"] = dj["discretization_controls"];
   data["base_convergence"] = dj["base"]["convergence"];
   nlohmann::json units = nlohmann::json::object(), base = dj["base"]["parameters"], winner = nlohmann::json::object();
