@@ -71,7 +71,8 @@ bool prefer_the_simplest(std::vector<size_t>& named, const std::vector<Candidate
 
 // The line for a confounded pair: "a or b: indistinguishable with this data", and where the
 // two fits differ in a base parameter by 10 % or more (moved_base), each such value with each
-// model: "...; youngs_modulus 57 kPa with a, 150 kPa with b: these data cannot tell which".
+// model: "...; youngs_modulus 5.704e+04 Pa with a, 1.496e+05 Pa with b: these data cannot tell
+// which".
 std::string confounded_line(const FittedModel& a, const FittedModel& b);
 
 }  // namespace ssc
