@@ -5,6 +5,7 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <stdexcept>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -631,10 +632,7 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
     if (!d.verdicts[i].implausible.empty() && d.verdicts[i].gain >= o.min_gain)
       d.lines.push_back(fmt::format("{} would remove {} of the held-out residual but is not named: its fit needs {}",
                                     d.verdicts[i].name, percent(d.verdicts[i].gain), d.verdicts[i].implausible[0]));
-  auto candidate = [&](const std::string& name) -> const FittedModel& {
-    return *std::find_if(d.candidates.begin(), d.candidates.end(), [&](const FittedModel& m) { return m.name == name; });
-  };
-  for (const auto& [a, b] : d.confounded) d.lines.push_back(confounded_line(candidate(a), candidate(b)));
+  for (const auto& [a, b] : d.confounded) d.lines.push_back(confounded_line(candidate_named(d, a), candidate_named(d, b)));
   for (const auto& [candidate, what] : d.undecided)
     d.lines.push_back(fmt::format("{}; these data cannot tell which ({} fits the held-in and the held-out frames as well "
                                   "as the base model)",
@@ -857,6 +855,12 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   for (const DiscretizationCheck& g : d.cause_on_controls) d.lines.push_back(control_check_line(g, d.cause));
   d.seconds = seconds_since(t0);
   return d;
+}
+
+const FittedModel& candidate_named(const Diagnosis& d, const std::string& name) {
+  const auto it = std::find_if(d.candidates.begin(), d.candidates.end(), [&](const FittedModel& m) { return m.name == name; });
+  if (it == d.candidates.end()) throw std::logic_error("diagnosis: no candidate " + name);
+  return *it;
 }
 
 }  // namespace ssc

@@ -108,4 +108,7 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
 
 nlohmann::json diagnosis_json(const Diagnosis& d);
 
+// The candidate of that name (std::logic_error if there is none).
+const FittedModel& candidate_named(const Diagnosis& d, const std::string& name);
+
 }  // namespace ssc

@@ -1,5 +1,4 @@
 // diagnosis.json (see diagnosis.h).
-#include <algorithm>
 #include <cmath>
 
 #include "models/diagnosis/candidates.h"
@@ -142,12 +141,9 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   if (!d.simpler_than.empty()) j["simpler_than"] = d.simpler_than;
   j["confounded"] = nlohmann::json::array();
   j["confounded_base"] = nlohmann::json::array();  // the base parameters a confounded pair's fits differ in
-  auto candidate = [&](const std::string& name) -> const FittedModel& {
-    return *std::find_if(d.candidates.begin(), d.candidates.end(), [&](const FittedModel& m) { return m.name == name; });
-  };
   for (const auto& [a, b] : d.confounded) {
     j["confounded"].push_back({a, b});
-    for (const auto& [name, with_a, with_b] : moved_base(candidate(a), candidate(b)))
+    for (const auto& [name, with_a, with_b] : moved_base(candidate_named(d, a), candidate_named(d, b)))
       j["confounded_base"].push_back({{"models", {a, b}}, {"parameter", name}, {"values", {with_a, with_b}}});
   }
   nlohmann::json id;
