@@ -122,14 +122,18 @@ TEST(DiagnosisNaming, AConfoundedPairSaysWhichBaseValuesDifferBetweenItsFits) {
   sharp.values = Eigen::Vector3d(57041.6, 0.100, 310747.6);
   smooth.names = {"youngs_modulus", "mass_damping", "material.stiffness_gradient.x"};
   smooth.values = Eigen::Vector3d(149574.5, 0.105, 15.6);
-  const std::string line = confounded_line(sharp, smooth);
+  const std::string line = confounded_line(sharp.name, smooth.name, &sharp, &smooth);
   EXPECT_EQ(line.rfind("two_materials or heterogeneous_stiffness: indistinguishable with this data; youngs_modulus ", 0), 0u)
       << line;
   EXPECT_NE(line.find(" with two_materials, "), std::string::npos) << line;
   EXPECT_NE(line.find(" with heterogeneous_stiffness: these data cannot tell which"), std::string::npos) << line;
   EXPECT_EQ(line.find("mass_damping"), std::string::npos) << line;
   smooth.values[0] = 60000;  // within 10 %: nothing to tell apart
-  EXPECT_EQ(confounded_line(sharp, smooth), "two_materials or heterogeneous_stiffness: indistinguishable with this data");
+  EXPECT_EQ(confounded_line(sharp.name, smooth.name, &sharp, &smooth),
+            "two_materials or heterogeneous_stiffness: indistinguishable with this data");
+  // A pair from the identifiability check: the cause and a base parameter, no fit of its own.
+  EXPECT_EQ(confounded_line("air_drag", "mass_damping", &sharp, nullptr),
+            "air_drag or mass_damping: indistinguishable with this data");
 }
 
 }  // namespace

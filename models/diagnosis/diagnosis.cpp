@@ -5,7 +5,6 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
-#include <stdexcept>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -632,7 +631,7 @@ void tell(Diagnosis& d, const DiagnosisOptions& o, const std::vector<size_t>& na
     if (!d.verdicts[i].implausible.empty() && d.verdicts[i].gain >= o.min_gain)
       d.lines.push_back(fmt::format("{} would remove {} of the held-out residual but is not named: its fit needs {}",
                                     d.verdicts[i].name, percent(d.verdicts[i].gain), d.verdicts[i].implausible[0]));
-  for (const auto& [a, b] : d.confounded) d.lines.push_back(confounded_line(candidate_named(d, a), candidate_named(d, b)));
+  for (const auto& [a, b] : d.confounded) d.lines.push_back(confounded_line(a, b, candidate_named(d, a), candidate_named(d, b)));
   for (const auto& [candidate, what] : d.undecided)
     d.lines.push_back(fmt::format("{}; these data cannot tell which ({} fits the held-in and the held-out frames as well "
                                   "as the base model)",
@@ -857,10 +856,9 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
   return d;
 }
 
-const FittedModel& candidate_named(const Diagnosis& d, const std::string& name) {
+const FittedModel* candidate_named(const Diagnosis& d, const std::string& name) {
   const auto it = std::find_if(d.candidates.begin(), d.candidates.end(), [&](const FittedModel& m) { return m.name == name; });
-  if (it == d.candidates.end()) throw std::logic_error("diagnosis: no candidate " + name);
-  return *it;
+  return it == d.candidates.end() ? nullptr : &*it;
 }
 
 }  // namespace ssc

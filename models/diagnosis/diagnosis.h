@@ -108,7 +108,8 @@ Diagnosis diagnose(const std::string& scene_path, const std::vector<std::string>
 
 nlohmann::json diagnosis_json(const Diagnosis& d);
 
-// The candidate of that name (std::logic_error if there is none).
-const FittedModel& candidate_named(const Diagnosis& d, const std::string& name);
+// The candidate of that name; nullptr where there is none (a confounded pair from the
+// identifiability check can hold a base parameter such as mass_damping).
+const FittedModel* candidate_named(const Diagnosis& d, const std::string& name);
 
 }  // namespace ssc

@@ -143,8 +143,10 @@ nlohmann::json diagnosis_json(const Diagnosis& d) {
   j["confounded_base"] = nlohmann::json::array();  // the base parameters a confounded pair's fits differ in
   for (const auto& [a, b] : d.confounded) {
     j["confounded"].push_back({a, b});
-    for (const auto& [name, with_a, with_b] : moved_base(candidate_named(d, a), candidate_named(d, b)))
-      j["confounded_base"].push_back({{"models", {a, b}}, {"parameter", name}, {"values", {with_a, with_b}}});
+    const FittedModel *fa = candidate_named(d, a), *fb = candidate_named(d, b);
+    if (fa && fb)
+      for (const auto& [name, with_a, with_b] : moved_base(*fa, *fb))
+        j["confounded_base"].push_back({{"models", {a, b}}, {"parameter", name}, {"values", {with_a, with_b}}});
   }
   nlohmann::json id;
   id["parameters"] = d.identifiability.names;

@@ -69,12 +69,13 @@ bool prefer_the_simplest(std::vector<size_t>& named, const std::vector<Candidate
   return true;
 }
 
-std::string confounded_line(const FittedModel& a, const FittedModel& b) {
-  std::string line = fmt::format("{} or {}: indistinguishable with this data", a.name, b.name);
+std::string confounded_line(const std::string& a, const std::string& b, const FittedModel* fa, const FittedModel* fb) {
+  std::string line = fmt::format("{} or {}: indistinguishable with this data", a, b);
   std::string values;
-  for (const auto& [name, with_a, with_b] : moved_base(a, b))
-    values += fmt::format("{}{} {} with {}, {} with {}", values.empty() ? "" : "; ", name, with_unit(name, with_a), a.name,
-                          with_unit(name, with_b), b.name);
+  if (fa && fb)
+    for (const auto& [name, with_a, with_b] : moved_base(*fa, *fb))
+      values += fmt::format("{}{} {} with {}, {} with {}", values.empty() ? "" : "; ", name, with_unit(name, with_a), a,
+                            with_unit(name, with_b), b);
   return values.empty() ? line : line + "; " + values + ": these data cannot tell which";
 }
 

@@ -69,10 +69,10 @@ void order_named(std::vector<size_t>& named, const std::vector<CandidateVerdict>
 bool prefer_the_simplest(std::vector<size_t>& named, const std::vector<CandidateVerdict>& verdicts,
                          const std::vector<std::pair<std::string, std::string>>& confounded);
 
-// The line for a confounded pair: "a or b: indistinguishable with this data", and where the
-// two fits differ in a base parameter by 10 % or more (moved_base), each such value with each
-// model: "...; youngs_modulus 5.704e+04 Pa with a, 1.496e+05 Pa with b: these data cannot tell
-// which".
-std::string confounded_line(const FittedModel& a, const FittedModel& b);
+// The line for a confounded pair: "a or b: indistinguishable with this data", and where both
+// are fitted candidates (fa, fb not null) whose fits differ in a base parameter by 10 % or
+// more (moved_base), each such value with each model: "...; youngs_modulus 5.704e+04 Pa with
+// a, 1.496e+05 Pa with b: these data cannot tell which".
+std::string confounded_line(const std::string& a, const std::string& b, const FittedModel* fa, const FittedModel* fb);
 
 }  // namespace ssc
