@@ -107,7 +107,7 @@ TEST(LevenbergMarquardt, TrialsOfRejectionsAheadTakeTheSameStepsInFewerRounds) {
   std::vector<Vec> ahead_path;
   int ahead_rounds = 0, told_ahead = 0;
   while (!ahead.done() && ahead_rounds < 10000) {
-    std::vector<Vec> trials = {ahead.ask()[0]};
+    std::vector<Vec> trials = {ahead.trial()};
     for (const Vec& z : ahead.lookahead(2)) trials.push_back(z);
     std::vector<std::vector<ResidualVector>> groups;
     for (const Vec& trial : trials) {

@@ -4,8 +4,8 @@
 // values can depend on the discretization where the base's do not: on 25 mm cells a soft cube
 // sliding with friction tips over where on 12.5 mm cells it rocks back, and the modulus fitted
 // with friction is a third higher. Not run for a measurement cause, or for a control that did
-// not run. Where step 3's fits run side by side (on the GPU) the likely cause's refits are
-// queued behind them and kept if it is named.
+// not run. Where step 3's fits run side by side (on the GPU) the likely cause's refits join
+// their queue, placed by weight, and are kept if it is named.
 #pragma once
 
 #include <map>

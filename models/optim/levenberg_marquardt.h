@@ -89,6 +89,8 @@ class LevenbergMarquardt {
   static constexpr double kSaturated = 6.9;  // sigmoid(6.9) = 1 - 1.0e-3
   // The points to evaluate next: the trial point, then trial + fd_step e_j, j = 0..n-1.
   std::vector<Eigen::VectorXd> ask() const { return points_for(trial_); }
+  // The trial point alone (ask()'s first).
+  const Eigen::VectorXd& trial() const { return trial_; }
   // A trial point and its forward-difference probes, as ask() gives them.
   std::vector<Eigen::VectorXd> points_for(const Eigen::VectorXd& trial) const;
   // Their residual vectors, in that order; `failure` non-empty when any of them failed (the

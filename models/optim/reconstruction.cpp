@@ -263,7 +263,7 @@ void run_rounds(std::vector<LevenbergMarquardt>& lm, const SurfaceResiduals& res
     std::vector<std::vector<Eigen::VectorXd>> trials(active.size());
     size_t points_asked = 0;
     for (size_t k = 0; k < active.size(); ++k) {
-      trials[k].push_back(lm[active[k]].ask()[0]);
+      trials[k].push_back(lm[active[k]].trial());
       points_asked += size_t(spaces[active[k]].space().size()) + 1;
     }
     if (width == 0) width = points_asked;

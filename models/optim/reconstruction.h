@@ -79,7 +79,8 @@ struct StartRecord {
   int iterations = 0;
   int restarts = 0;  // lm: how often it went on from a stall (reconstruction.cpp, check_convergence_claims)
   // The batches of the starts' rounds it took part in (lm: its first evaluation, its iterations
-  // and its rejected trials; a GPU round costs about the same however few starts take part).
+  // and its rejected trials, several of those a round with lm_lookahead; a GPU round costs about
+  // the same however few starts take part).
   int rounds = 0;
   // "converged: ...", "iteration limit" or "failed: ..." (docs/reconstruction.md#stopping);
   // converged: the reason starts with "converged".
