@@ -383,13 +383,15 @@ void judge(Diagnosis& d, const DiagnosisContext& c, std::vector<size_t>& named) 
     v.implausible = implausible_values(m, c.extent);
     const bool measurement = row && row->fit == ExtensionRow::Fit::Measurement;
     const bool control_gained = finest && finest->gain > 0;
-    // A correction of the recording stands for nothing the model's discretization could: it is
-    // laid onto the finest control's fit (searched again on that motion), where it would pass
-    // the other bars, to see what it explains beyond it.
+    // A correction of the recording stands for nothing the model's discretization could: where
+    // it would pass the other bars, it is fitted again with the finest control's physics, as it
+    // was with the base's, to see what it explains beyond it.
     if (measurement && control_gained && v.gain >= o.min_gain && v.gain_low > v.placebo_gain + o.margin &&
         v.implausible.empty()) {
       try {
-        const FittedModel over = measurement_on(*row, finest->fit, c);
+        DiagnosisContext same_cost = c;
+        same_cost.phi_max = d.base.problem.phi_max;
+        const FittedModel over = measurement_on(*row, finest->fit, same_cost);
         const Gain gc = cost_gain(finest->fit.frame_costs, over.frame_costs, d.heldin_frames, -1, o.bootstrap,
                                   o.seed + 31 * i);
         v.control_gain = gc.value, v.control_gain_low = gc.low;

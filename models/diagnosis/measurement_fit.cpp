@@ -230,14 +230,15 @@ void score_corrected(FittedModel& fm, const Problem& problem, const std::string&
   fm.values[fm.values.size() - 1] = value;
 }
 
-}  // namespace
-
-FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, const DiagnosisContext& c,
-                            std::vector<std::map<std::string, double>>& base_starts) {
+// The correction fitted with `model`'s physics (`physics`: its scene keys): laid onto its
+// motion, and where it gains, `model`'s parameters refitted on the corrected frames from
+// `starts` and the correction searched again at that fit.
+FittedModel fit_correction(const ExtensionRow& row, const FittedModel& model, ModelSpec physics,
+                           const DiagnosisContext& c, std::vector<std::map<std::string, double>>& starts) {
   const auto t0 = std::chrono::steady_clock::now();
-  const Problem& recorded = base.problem;
+  const Problem& recorded = model.problem;
   const CorrectionSearch s = correction_search(row, recorded, c);
-  FittedModel fm = base;
+  FittedModel fm = model;
   fm.name = row.name;
   fm.extra = {s.parameter};
   fm.note.clear();
@@ -255,15 +256,15 @@ FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, co
     value = found.value;
     if (refit == kMostRefits || gain < kRefitGain || (refit > 0 && !moved)) {
       if (refit == 0)
-        fm.note = fmt::format("fitted with the base model's physics: the correction removes {:.1f} % of the held-in "
+        fm.note = fmt::format("fitted with the {} model's physics: the correction removes {:.1f} % of the held-in "
                               "cost, below the {:.0f} % worth a refit",
-                              100 * gain, 100 * kRefitGain);
+                              model.name, 100 * gain, 100 * kRefitGain);
       break;
     }
-    ModelSpec spec{row.name};
+    ModelSpec spec = physics;
     const MeasurementCorrection m = measurement_correction(s.parameter, value);
     spec.adjust = [m, dir = c.observations](Problem& q) { apply_measurement(q, m, dir); };
-    FittedModel refitted = fit_together({spec}, c, base_starts)[0];
+    FittedModel refitted = fit_together({spec}, c, starts)[0];
     if (refitted.failed) {
       fm.note = "the refit with the corrected frames failed: " + refitted.failure;
       break;
@@ -272,25 +273,23 @@ FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, co
     fm.name = row.name;
     fm.extra = {s.parameter};
   }
-  score_corrected(fm, base.problem, s.parameter, value, c);
+  score_corrected(fm, model.problem, s.parameter, value, c);
   fm.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return fm;
 }
 
+}  // namespace
+
+FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, const DiagnosisContext& c,
+                            std::vector<std::map<std::string, double>>& base_starts) {
+  return fit_correction(row, base, ModelSpec{row.name}, c, base_starts);
+}
+
 FittedModel measurement_on(const ExtensionRow& row, const FittedModel& model, const DiagnosisContext& c) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const CorrectionSearch s = correction_search(row, model.problem, c);
-  const Found found =
-      search_correction(s, model.problem, {with_values(model.problem.scene, model.names, model.values)}, row.off_value,
-                        c.options.device);
-  FittedModel fm = model;
-  fm.name = row.name;
-  fm.extra = {s.parameter};
-  fm.note.clear();
-  fm.proposal.clear();
-  score_corrected(fm, model.problem, s.parameter, found.value, c);
-  fm.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  return fm;
+  ModelSpec physics = model.spec ? *model.spec : ModelSpec{model.name};
+  physics.name = row.name + " with " + model.name;
+  std::vector<std::map<std::string, double>> start = {values_by_name(model)};
+  return fit_correction(row, model, physics, c, start);
 }
 
 }  // namespace ssc

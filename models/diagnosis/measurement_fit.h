@@ -30,9 +30,11 @@ void apply_measurement(Problem& p, const MeasurementCorrection& m, const std::st
 FittedModel fit_measurement(const ExtensionRow& row, const FittedModel& base, const DiagnosisContext& c,
                             std::vector<std::map<std::string, double>>& base_starts);
 
-// The correction searched on another model's motion (its problem and fitted values: a
-// discretization control's), with that model's physics: what of the residual it leaves the
-// measurement explains. The result is scored like fit_measurement's, without a refit.
+// The correction fitted with another model's physics (a discretization control's: its scene
+// keys, problem and fitted values) as fit_measurement fits it with the base's: searched on that
+// model's motion, and where it gains, that model refitted on the corrected frames from its own
+// fit (one start) and the correction searched again. What of the residual that model leaves the
+// measurement explains. `c` carries the cost threshold that model was fitted with.
 FittedModel measurement_on(const ExtensionRow& row, const FittedModel& model, const DiagnosisContext& c);
 
 }  // namespace ssc
