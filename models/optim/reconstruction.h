@@ -63,8 +63,8 @@ struct ReconstructionOptions {
   std::string device = "cpu";       // "cuda" or "cuda:K": on the GPUs (models/sim/compute_device.h)
   // lm: the trials of up to this many more rejections evaluated with each trial where a round
   // has room (reconstruction.cpp, run_rounds); -1: SSC_LM_LOOKAHEAD=N where set, else 0. Meant
-  // for the GPU, where a round costs about what its longest simulation does; not yet measured
-  // there, so off by default.
+  // for the GPU, where a round costs about what its longest simulation does; off by default: the
+  // diagnosis timing case, four fits to a GPU, was no faster with it (docs/reconstruction.md).
   int lm_lookahead = -1;
   // Within a round: the steps done of the batch evaluation running and their total (forward,
   // and backward with the gradient), for progress on long rounds; may be empty.
