@@ -8,37 +8,41 @@
 namespace ssc {
 namespace {
 
-struct Pack4 {
-  typedef double Lanes __attribute__((vector_size(32)));
+// N lanes of T in one SIMD register (GCC vector extensions): four doubles or eight floats.
+template <class T, int N>
+struct Pack {
+  typedef T Lanes __attribute__((vector_size(N * sizeof(T))));
   Lanes v;
-  Pack4() = default;
-  Pack4(double x) : v{x, x, x, x} {}  // NOLINT: Real(0), Real(1) in the ops
-  explicit Pack4(Lanes l) : v(l) {}
+  Pack() = default;
+  Pack(double x) {  // NOLINT: Real(0), Real(1) in the ops
+    for (int l = 0; l < N; ++l) v[l] = T(x);
+  }
+  explicit Pack(Lanes l) : v(l) {}
   // A branch of the ops on a value: taken when every lane takes it.
-  bool operator==(Pack4 o) const {
-    for (int l = 0; l < 4; ++l)
+  bool operator==(Pack o) const {
+    for (int l = 0; l < N; ++l)
       if (v[l] != o.v[l]) return false;
     return true;
   }
 };
-inline Pack4 operator+(Pack4 a, Pack4 b) { return Pack4(a.v + b.v); }
-inline Pack4 operator-(Pack4 a, Pack4 b) { return Pack4(a.v - b.v); }
-inline Pack4 operator*(Pack4 a, Pack4 b) { return Pack4(a.v * b.v); }
-inline Pack4 operator/(Pack4 a, Pack4 b) { return Pack4(a.v / b.v); }
-inline Pack4 operator-(Pack4 a) { return Pack4(-a.v); }
-inline Pack4& operator+=(Pack4& a, Pack4 b) { a.v += b.v; return a; }
-inline Pack4& operator-=(Pack4& a, Pack4 b) { a.v -= b.v; return a; }
-inline Pack4& operator*=(Pack4& a, Pack4 b) { a.v *= b.v; return a; }
+template <class T, int N> inline Pack<T, N> operator+(Pack<T, N> a, Pack<T, N> b) { return Pack<T, N>(a.v + b.v); }
+template <class T, int N> inline Pack<T, N> operator-(Pack<T, N> a, Pack<T, N> b) { return Pack<T, N>(a.v - b.v); }
+template <class T, int N> inline Pack<T, N> operator*(Pack<T, N> a, Pack<T, N> b) { return Pack<T, N>(a.v * b.v); }
+template <class T, int N> inline Pack<T, N> operator/(Pack<T, N> a, Pack<T, N> b) { return Pack<T, N>(a.v / b.v); }
+template <class T, int N> inline Pack<T, N> operator-(Pack<T, N> a) { return Pack<T, N>(-a.v); }
+template <class T, int N> inline Pack<T, N>& operator+=(Pack<T, N>& a, Pack<T, N> b) { a.v += b.v; return a; }
+template <class T, int N> inline Pack<T, N>& operator-=(Pack<T, N>& a, Pack<T, N> b) { a.v -= b.v; return a; }
+template <class T, int N> inline Pack<T, N>& operator*=(Pack<T, N>& a, Pack<T, N> b) { a.v *= b.v; return a; }
 
-// Cells first .. first + 3.
-__attribute__((target_clones("avx2", "default"))) void apply_four(int first, double h, const double* rotation,
-                                                                   const double* weights, const double* lambda,
-                                                                   const double* mu, const double* p,
-                                                                   const int* cell_nodes, double* corner) {
-  Mat3<Pack4> R;
-  Pack4 w[8], la, m;
-  Vec3<Pack4> pc[8], y[8];
-  for (int l = 0; l < 4; ++l) {
+// Cells first .. first + N - 1.
+template <class T, int N>
+inline void apply_pack(int first, T h, const T* rotation, const T* weights, const T* lambda, const T* mu, const T* p,
+                       const int* cell_nodes, T* corner) {
+  using P = Pack<T, N>;
+  Mat3<P> R;
+  P w[8], la, m;
+  Vec3<P> pc[8], y[8];
+  for (int l = 0; l < N; ++l) {
     const int e = first + l;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) R.m[i][j].v[l] = rotation[9 * e + 3 * i + j];
@@ -50,10 +54,24 @@ __attribute__((target_clones("avx2", "default"))) void apply_four(int first, dou
     la.v[l] = lambda[e];
     m.v[l] = mu[e];
   }
-  ops::corotated_apply(R, w, la, m, Pack4(h), pc, y);
-  for (int l = 0; l < 4; ++l)
+  ops::corotated_apply(R, w, la, m, P(h), pc, y);
+  for (int l = 0; l < N; ++l)
     for (int c = 0; c < 8; ++c)
       for (int k = 0; k < 3; ++k) corner[24 * (first + l) + 3 * c + k] = y[c][k].v[l];
+}
+
+__attribute__((target_clones("avx2", "default"), flatten)) void apply_four(int first, double h, const double* rotation,
+                                                                   const double* weights, const double* lambda,
+                                                                   const double* mu, const double* p,
+                                                                   const int* cell_nodes, double* corner) {
+  apply_pack<double, 4>(first, h, rotation, weights, lambda, mu, p, cell_nodes, corner);
+}
+
+__attribute__((target_clones("avx2", "default"), flatten)) void apply_eight(int first, float h, const float* rotation,
+                                                                    const float* weights, const float* lambda,
+                                                                    const float* mu, const float* p,
+                                                                    const int* cell_nodes, float* corner) {
+  apply_pack<float, 8>(first, h, rotation, weights, lambda, mu, p, cell_nodes, corner);
 }
 
 }  // namespace
@@ -66,6 +84,16 @@ void stiffness_apply_cells(int cell_count, double h, const double* rotation, con
   for (int q = 0; q < groups; ++q) apply_four(4 * q, h, rotation, weights, lambda, mu, p, cell_nodes, corner);
   const ops::PartContext<double> cx{h, cell_count, 0, 0, 0, 0};
   for (int e = 4 * groups; e < cell_count; ++e)
+    ops::stiffness_apply_cell(e, cx, rotation, weights, lambda, mu, p, cell_nodes, corner);
+}
+
+void stiffness_apply_cells(int cell_count, float h, const float* rotation, const float* weights, const float* lambda,
+                           const float* mu, const float* p, const int* cell_nodes, float* corner) {
+  const int groups = cell_count / 8;
+#pragma omp parallel for schedule(static) if (cell_count >= kCellParallelThreshold)
+  for (int q = 0; q < groups; ++q) apply_eight(8 * q, h, rotation, weights, lambda, mu, p, cell_nodes, corner);
+  const ops::PartContext<float> cx{h, cell_count, 0, 0, 0, 0};
+  for (int e = 8 * groups; e < cell_count; ++e)
     ops::stiffness_apply_cell(e, cx, rotation, weights, lambda, mu, p, cell_nodes, corner);
 }
 

@@ -13,5 +13,8 @@ namespace ssc {
 void stiffness_apply_cells(int cell_count, double h, const double* rotation, const double* weights,
                            const double* lambda, const double* mu, const double* p, const int* cell_nodes,
                            double* corner);
+// The same in single precision, eight cells at a time.
+void stiffness_apply_cells(int cell_count, float h, const float* rotation, const float* weights, const float* lambda,
+                           const float* mu, const float* p, const int* cell_nodes, float* corner);
 
 }  // namespace ssc

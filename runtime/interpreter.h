@@ -24,6 +24,12 @@ struct SolverOptions {
   int cg_max_iterations = 2000;
   double extension_tolerance = 1e-8;
   int extension_max_iterations = 5000;
+  // A double time-step solve iterates on its operator with the element arithmetic in float,
+  // eight cells at a time, and recomputes the residual in double (runtime/pcg.h,
+  // jacobi_pcg_reliable). Off by default (docs/benchmarks.md: finite differences of such a run
+  // carry float's rounding, and a solve to below double's attainable accuracy does not stop);
+  // SSC_CPU_SINGLE_APPLY=1 turns it on.
+  bool single_precision_cells = false;
 };
 
 // What the last run() reported, per batch item.

@@ -124,4 +124,89 @@ PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b,
   }
 }
 
+// The residual is recomputed with the exact operator once it has fallen by this factor since it
+// last was, and before the solve stops.
+constexpr double kReliableUpdateFactor = 0.01;
+
+// Jacobi PCG whose iterations apply `fast`, an approximation of the operator (the element
+// arithmetic in float), with reliable updates: x is accumulated in Real, and the residual is
+// recomputed as b - exact(x) whenever it has fallen by kReliableUpdateFactor since the last
+// recomputation, and before the solve stops, so that the stopping test and the solution are
+// the exact operator's to its tolerance (Sleijpen and van der Vorst 1996; as in mixed-precision
+// CG on GPUs, Clark et al. 2010). The recomputations are not counted as iterations.
+template <class Real, class Fast, class Exact>
+PcgResult jacobi_pcg_reliable(long n, Fast&& fast, Exact&& exact, const Real* inv_diag, const Real* b, Real* x,
+                              double tolerance, int max_iterations, double reference = 0) {
+  std::vector<Real> r(n), z(n), p(n), q(n);
+  PcgResult result;
+  const double b_norm = std::sqrt(deterministic_dot(b, b, n));
+  result.rhs_norm = b_norm;
+  if (b_norm < negligible_rhs_norm<Real>()) {
+    for (long i = 0; i < n; ++i) x[i] = Real(0);
+    result.converged = true;
+    return result;
+  }
+  double rz = 0, r_norm = 0;
+  // r = b - exact(x), z = M^-1 r; r.z and |r|^2.
+  auto exact_residual = [&] {
+    exact(x, q.data());
+    const auto sums = blocked_sums<2>(n, [&](long i, double* acc) {
+      r[i] = b[i] - q[i];
+      z[i] = inv_diag[i] * r[i];
+      acc[0] += double(r[i]) * double(z[i]);
+      acc[1] += double(r[i]) * double(r[i]);
+    });
+    rz = sums[0];
+    r_norm = std::sqrt(sums[1]);
+  };
+  exact_residual();
+  for (long i = 0; i < n; ++i) p[i] = z[i];
+  double last_exact = r_norm;
+  bool exact_now = true;
+  const double scale = std::max(b_norm, reference);
+  while (true) {
+    if (r_norm / scale <= tolerance && !exact_now) {
+      exact_residual();
+      last_exact = r_norm;
+      exact_now = true;
+    }
+    result.relative_residual = r_norm / scale;
+    if (result.relative_residual <= tolerance) {
+      result.converged = true;
+      return result;
+    }
+    if (result.iterations >= max_iterations || !std::isfinite(r_norm)) {
+      if (!exact_now && std::isfinite(r_norm)) {
+        exact_residual();
+        result.relative_residual = r_norm / scale;
+        result.converged = result.relative_residual <= tolerance;
+      }
+      return result;
+    }
+    fast(p.data(), q.data());
+    const double pq = deterministic_dot(p.data(), q.data(), n);
+    const Real step = Real(rz / pq);
+    const double rz_old = rz;
+    const auto sums = blocked_sums<2>(n, [&](long i, double* acc) {
+      x[i] += step * p[i];
+      r[i] -= step * q[i];
+      z[i] = inv_diag[i] * r[i];
+      acc[0] += double(r[i]) * double(z[i]);
+      acc[1] += double(r[i]) * double(r[i]);
+    });
+    rz = sums[0];
+    r_norm = std::sqrt(sums[1]);
+    exact_now = false;
+    if (r_norm < kReliableUpdateFactor * last_exact) {
+      exact_residual();
+      last_exact = r_norm;
+      exact_now = true;
+    }
+    const Real beta = Real(rz / rz_old);
+#pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
+    for (long i = 0; i < n; ++i) p[i] = z[i] + beta * p[i];
+    ++result.iterations;
+  }
+}
+
 }  // namespace ssc

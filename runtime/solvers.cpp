@@ -4,9 +4,11 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <stdexcept>
 #include <type_traits>
+#include <vector>
 
 #include "ops/corotation.h"
 #include "ops/elasticity.h"
@@ -40,6 +42,12 @@ struct Slots {
   const Real* optional(const char* slot) const { return op.bound(slot) ? value(slot) : nullptr; }
 };
 
+// Whether a double solve applies the cells in float (SolverOptions::single_precision_cells, or
+// SSC_CPU_SINGLE_APPLY=1; SSC_CPU_SCALAR_APPLY=1 keeps the scalar double apply).
+bool single_precision_cells(const SolverOptions& o) {
+  return (o.single_precision_cells || std::getenv("SSC_CPU_SINGLE_APPLY")) && !std::getenv("SSC_CPU_SCALAR_APPLY");
+}
+
 // The SPD time-step system with fixed nodes eliminated (identity rows and columns).
 template <class Real>
 struct NewmarkSystem {
@@ -51,6 +59,7 @@ struct NewmarkSystem {
   const Real* fixed;
   const Real* damping;  // C, 6 per node, or nullptr
   ops::NewmarkCoefficients<Real> c;
+  bool single = false;  // the cells in float first (SolverOptions::single_precision_cells)
 
   bool is_fixed(int i) const { return fixed[i] != Real(0); }
 
@@ -82,6 +91,47 @@ struct NewmarkSystem {
     }
   }
 
+  // The cells' data in single precision, for an apply whose element arithmetic runs in float;
+  // p is scaled by 1 / scale on the way in (the operator is linear), so that a small adjoint
+  // cotangent's entries do not underflow in float.
+  struct SingleCells {
+    std::vector<float> rotation, weights, lambda, mu, p, corner;
+    Real scale = 1;
+  };
+
+  // scale: the size of the solve's first direction, max |M^-1 b|.
+  SingleCells single_cells(const Real* b, const Real* inv_diag) const {
+    const size_t cells = size_t(g.cell_count);
+    SingleCells s;
+    Real largest = 0;
+    for (long k = 0; k < 3L * g.node_count; ++k) largest = std::max(largest, std::abs(b[k] * inv_diag[k]));
+    if (largest > 0) s.scale = largest;
+    s.rotation.assign(rotation, rotation + 9 * cells);
+    s.weights.assign(weights, weights + 8 * cells);
+    s.lambda.assign(lambda, lambda + cells);
+    s.mu.assign(mu, mu + cells);
+    s.p.resize(3 * size_t(g.node_count));
+    s.corner.resize(24 * cells);
+    return s;
+  }
+
+  // A as apply() has it, R K R^T p in float (eight cells at a time, runtime/element_packs.h),
+  // the corner sums and the rest in double.
+  void apply_single(const Real* p, Real* q, SingleCells& s) const {
+    const Real inverse = Real(1) / s.scale;
+    for (size_t k = 0; k < s.p.size(); ++k) s.p[k] = float(p[k] * inverse);
+    stiffness_apply_cells(g.cell_count, float(g.h), s.rotation.data(), s.weights.data(), s.lambda.data(),
+                          s.mu.data(), s.p.data(), g.cell_nodes.data(), s.corner.data());
+    const int* offset = g.node_cell_offset.data();
+    const int* entry = g.node_cell_entry.data();
+#pragma omp parallel for schedule(static) if (g.node_count >= kParallelThreshold)
+    for (int i = 0; i < g.node_count; ++i) {
+      const Vec3<float> kp = ops::gather_corner_sum(s.corner.data(), offset, entry, i);
+      const Vec3<Real> k = make_vec3(Real(kp.x), Real(kp.y), Real(kp.z));
+      store3(q, i, is_fixed(i) ? load3(p, i) : node_apply(i, load3(p, i), s.scale * k));
+    }
+  }
+
   // Solves A x = rhs (fixed entries of rhs ignored, x starts from its content) to a
   // residual of tolerance * max(|rhs|, reference) (runtime/pcg.h).
   PcgResult solve(const Real* rhs, Real* x, double tolerance, int max_iterations, double reference = 0) const {
@@ -105,6 +155,14 @@ struct NewmarkSystem {
       }
     }
     auto op = [&](const Real* p, Real* q) { apply(p, q, corner); };
+    if constexpr (std::is_same_v<Real, double>) {
+      if (single) {
+        SingleCells s = single_cells(b.data(), inv_diag.data());
+        auto op_single = [&](const Real* p, Real* q) { apply_single(p, q, s); };
+        return jacobi_pcg_reliable<Real>(n, op_single, op, inv_diag.data(), b.data(), x, tolerance, max_iterations,
+                                         reference);
+      }
+    }
     return jacobi_pcg<Real>(n, op, inv_diag.data(), b.data(), x, tolerance, max_iterations, reference);
   }
 };
@@ -115,7 +173,8 @@ NewmarkSystem<Real> newmark_system(Interpreter<Real>& in, const Slots<Real>& a) 
                                            a.scalar("stiffness_damping"));
   return NewmarkSystem<Real>{in.grid(),          in.static_real("cell_weights"), a.value("rotation"),
                              a.value("lambda"),  a.value("mu"),                  a.value("mass"),
-                             a.value("fixed"),   a.optional("damping"),          c};
+                             a.value("fixed"),   a.optional("damping"),          c,
+                             single_precision_cells(in.options())};
 }
 
 template <class Real>

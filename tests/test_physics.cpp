@@ -657,6 +657,31 @@ bool bitwise_equal(const std::vector<std::vector<double>>& a, const std::vector<
   return true;
 }
 
+// The Newmark solve with the element arithmetic in float and reliable updates
+// (SSC_CPU_SINGLE_APPLY=1, runtime/pcg.h): each solve stops on the double operator's residual,
+// so the trajectory is the double solve's to about the solver's tolerance, not bit for bit.
+TEST(PhysicsBatch, FloatCellsWithReliableUpdatesFollowTheDoubleTrajectory) {
+  const Scene scene = scene_from(contact_scene());
+  const SimGrid grid = build_body_grid(scene);
+  Simulation exact(scene, grid);
+  const auto reference = trajectory(exact, 0, scene.time.steps);
+  ::setenv("SSC_CPU_SINGLE_APPLY", "1", 1);
+  Simulation single(scene, grid);
+  const auto mixed = trajectory(single, 0, scene.time.steps);
+  ::unsetenv("SSC_CPU_SINGLE_APPLY");
+  ASSERT_EQ(mixed.size(), reference.size());
+  EXPECT_FALSE(bitwise_equal(mixed, reference)) << "the float path did not run";
+  const size_t n = 3 * size_t(grid.node_count);
+  double worst = 0, largest = 0;
+  for (size_t s = 0; s < reference.size(); ++s)
+    for (size_t i = 0; i < n; ++i) {  // displacements
+      worst = std::max(worst, std::abs(mixed[s][i] - reference[s][i]));
+      largest = std::max(largest, std::abs(reference[s][i]));
+    }
+  std::printf("largest displacement %.4g m, largest difference %.3g m\n", largest, worst);
+  EXPECT_LT(worst, 1e-8 * largest);
+}
+
 TEST(PhysicsBatch, BatchOfTwoEqualsTwoSingleRunsBitwise) {
   const Scene scene = scene_from(contact_scene());
   const SimGrid grid = build_body_grid(scene);
