@@ -60,6 +60,8 @@ inline void apply_pack(int first, T h, const T* rotation, const T* weights, cons
       for (int k = 0; k < 3; ++k) corner[24 * (first + l) + 3 * c + k] = y[c][k].v[l];
 }
 
+// flatten: the ops are inlined into each clone, so no call passes a pack between code built
+// for different targets (a call left out of line read garbage: NaN in the first solve).
 __attribute__((target_clones("avx2", "default"), flatten)) void apply_four(int first, double h, const double* rotation,
                                                                    const double* weights, const double* lambda,
                                                                    const double* mu, const double* p,

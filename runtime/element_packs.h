@@ -1,9 +1,10 @@
-// The CPU's element apply four cells at a time: ops::corotated_apply instantiated on Pack4,
-// four doubles in SIMD lanes (GCC vector extensions; AVX2 where the CPU has it, chosen at
-// run time, else SSE2 pairs). Each lane does the scalar code's operations in its order, so the
+// The CPU's element apply four cells at a time: ops::corotated_apply instantiated on a pack of
+// four doubles in SIMD lanes (GCC vector extensions; AVX2 where the CPU has it, chosen at run
+// time, else SSE2 pairs). Each lane does the scalar code's operations in its order, so the
 // corners are the scalar apply's (a zero-weight corner in a group with weighted ones adds
 // zeros where the scalar code skips it). The Newmark solve's iterations spend most of their
-// time here (docs/benchmarks.md).
+// time here (docs/benchmarks.md). In float, eight cells at a time, for the opt-in solve whose
+// element arithmetic is single precision (runtime/solvers.cpp, SSC_CPU_SINGLE_APPLY).
 #pragma once
 
 namespace ssc {

@@ -59,7 +59,7 @@ struct NewmarkSystem {
   const Real* fixed;
   const Real* damping;  // C, 6 per node, or nullptr
   ops::NewmarkCoefficients<Real> c;
-  bool single = false;  // the cells in float first (SolverOptions::single_precision_cells)
+  bool single = false;  // the cells' arithmetic in float (SolverOptions::single_precision_cells)
 
   bool is_fixed(int i) const { return fixed[i] != Real(0); }
 
