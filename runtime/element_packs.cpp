@@ -78,25 +78,31 @@ __attribute__((target_clones("avx2", "default"), flatten)) void apply_eight(int 
 
 }  // namespace
 
+namespace {
+
+// The packs of N cells, then the tail one cell at a time.
+template <int N, class T, class Pack>
+void apply_cells(Pack&& apply_pack_at, int cell_count, T h, const T* rotation, const T* weights, const T* lambda,
+                 const T* mu, const T* p, const int* cell_nodes, T* corner) {
+  const int groups = cell_count / N;
+#pragma omp parallel for schedule(static) if (cell_count >= kCellParallelThreshold)
+  for (int q = 0; q < groups; ++q) apply_pack_at(N * q, h, rotation, weights, lambda, mu, p, cell_nodes, corner);
+  const ops::PartContext<T> cx{h, cell_count, 0, 0, 0, 0};
+  for (int e = N * groups; e < cell_count; ++e)
+    ops::stiffness_apply_cell(e, cx, rotation, weights, lambda, mu, p, cell_nodes, corner);
+}
+
+}  // namespace
+
 void stiffness_apply_cells(int cell_count, double h, const double* rotation, const double* weights,
                            const double* lambda, const double* mu, const double* p, const int* cell_nodes,
                            double* corner) {
-  const int groups = cell_count / 4;
-#pragma omp parallel for schedule(static) if (cell_count >= kCellParallelThreshold)
-  for (int q = 0; q < groups; ++q) apply_four(4 * q, h, rotation, weights, lambda, mu, p, cell_nodes, corner);
-  const ops::PartContext<double> cx{h, cell_count, 0, 0, 0, 0};
-  for (int e = 4 * groups; e < cell_count; ++e)
-    ops::stiffness_apply_cell(e, cx, rotation, weights, lambda, mu, p, cell_nodes, corner);
+  apply_cells<4>(apply_four, cell_count, h, rotation, weights, lambda, mu, p, cell_nodes, corner);
 }
 
 void stiffness_apply_cells(int cell_count, float h, const float* rotation, const float* weights, const float* lambda,
                            const float* mu, const float* p, const int* cell_nodes, float* corner) {
-  const int groups = cell_count / 8;
-#pragma omp parallel for schedule(static) if (cell_count >= kCellParallelThreshold)
-  for (int q = 0; q < groups; ++q) apply_eight(8 * q, h, rotation, weights, lambda, mu, p, cell_nodes, corner);
-  const ops::PartContext<float> cx{h, cell_count, 0, 0, 0, 0};
-  for (int e = 8 * groups; e < cell_count; ++e)
-    ops::stiffness_apply_cell(e, cx, rotation, weights, lambda, mu, p, cell_nodes, corner);
+  apply_cells<8>(apply_eight, cell_count, h, rotation, weights, lambda, mu, p, cell_nodes, corner);
 }
 
 }  // namespace ssc

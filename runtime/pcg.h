@@ -72,19 +72,26 @@ constexpr double negligible_rhs_norm() {
   return sizeof(Real) == 4 ? 1e-20 : 1e-100;
 }
 
+// |b| in the result; for a negligible b, x = 0 and a converged result.
+template <class Real>
+PcgResult rhs_norm_of(const Real* b, Real* x, long n) {
+  PcgResult result;
+  result.rhs_norm = std::sqrt(deterministic_dot(b, b, n));
+  if (result.rhs_norm < negligible_rhs_norm<Real>()) {
+    for (long i = 0; i < n; ++i) x[i] = Real(0);
+    result.converged = true;
+  }
+  return result;
+}
+
 // apply(p, Ap) computes the (SPD) operator; inv_diag is the Jacobi preconditioner.
 template <class Real, class Apply>
 PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b, Real* x, double tolerance,
                      int max_iterations, double reference = 0) {
   std::vector<Real> r(n), z(n), p(n), q(n);
-  PcgResult result;
-  const double b_norm = std::sqrt(deterministic_dot(b, b, n));
-  result.rhs_norm = b_norm;
-  if (b_norm < negligible_rhs_norm<Real>()) {
-    for (long i = 0; i < n; ++i) x[i] = Real(0);
-    result.converged = true;
-    return result;
-  }
+  PcgResult result = rhs_norm_of(b, x, n);
+  if (result.converged) return result;
+  const double b_norm = result.rhs_norm;
   apply(x, q.data());
   // r = b - A x, z = M^-1 r, p = z; r.z and |r|^2 in the same pass.
   auto start = blocked_sums<2>(n, [&](long i, double* acc) {
@@ -138,14 +145,9 @@ template <class Real, class Fast, class Exact>
 PcgResult jacobi_pcg_reliable(long n, Fast&& fast, Exact&& exact, const Real* inv_diag, const Real* b, Real* x,
                               double tolerance, int max_iterations, double reference = 0) {
   std::vector<Real> r(n), z(n), p(n), q(n);
-  PcgResult result;
-  const double b_norm = std::sqrt(deterministic_dot(b, b, n));
-  result.rhs_norm = b_norm;
-  if (b_norm < negligible_rhs_norm<Real>()) {
-    for (long i = 0; i < n; ++i) x[i] = Real(0);
-    result.converged = true;
-    return result;
-  }
+  PcgResult result = rhs_norm_of(b, x, n);
+  if (result.converged) return result;
+  const double b_norm = result.rhs_norm;
   double rz = 0, r_norm = 0;
   // r = b - exact(x), z = M^-1 r; r.z and |r|^2.
   auto exact_residual = [&] {
