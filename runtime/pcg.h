@@ -84,6 +84,19 @@ PcgResult rhs_norm_of(const Real* b, Real* x, long n) {
   return result;
 }
 
+// x += step p, r -= step q, z = M^-1 r; the new r.z and |r|^2 in the same pass.
+template <class Real>
+std::array<double, 2> cg_update(long n, Real step, const Real* p, const Real* q, const Real* inv_diag, Real* x,
+                                Real* r, Real* z) {
+  return blocked_sums<2>(n, [&](long i, double* acc) {
+    x[i] += step * p[i];
+    r[i] -= step * q[i];
+    z[i] = inv_diag[i] * r[i];
+    acc[0] += double(r[i]) * double(z[i]);
+    acc[1] += double(r[i]) * double(r[i]);
+  });
+}
+
 // apply(p, Ap) computes the (SPD) operator; inv_diag is the Jacobi preconditioner.
 template <class Real, class Apply>
 PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b, Real* x, double tolerance,
@@ -113,15 +126,7 @@ PcgResult jacobi_pcg(long n, Apply&& apply, const Real* inv_diag, const Real* b,
     if (result.iterations >= max_iterations || !std::isfinite(r_norm)) return result;
     apply(p.data(), q.data());
     const double pq = deterministic_dot(p.data(), q.data(), n);
-    const Real step = Real(rz / pq);
-    // x += step p, r -= step q, z = M^-1 r; the new r.z and |r|^2 in the same pass.
-    const auto sums = blocked_sums<2>(n, [&](long i, double* acc) {
-      x[i] += step * p[i];
-      r[i] -= step * q[i];
-      z[i] = inv_diag[i] * r[i];
-      acc[0] += double(r[i]) * double(z[i]);
-      acc[1] += double(r[i]) * double(r[i]);
-    });
+    const auto sums = cg_update(n, Real(rz / pq), p.data(), q.data(), inv_diag, x, r.data(), z.data());
     const Real beta = Real(sums[0] / rz);
     rz = sums[0];
 #pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
@@ -187,15 +192,8 @@ PcgResult jacobi_pcg_reliable(long n, Fast&& fast, Exact&& exact, const Real* in
     }
     fast(p.data(), q.data());
     const double pq = deterministic_dot(p.data(), q.data(), n);
-    const Real step = Real(rz / pq);
     const double rz_old = rz;
-    const auto sums = blocked_sums<2>(n, [&](long i, double* acc) {
-      x[i] += step * p[i];
-      r[i] -= step * q[i];
-      z[i] = inv_diag[i] * r[i];
-      acc[0] += double(r[i]) * double(z[i]);
-      acc[1] += double(r[i]) * double(r[i]);
-    });
+    const auto sums = cg_update(n, Real(rz / pq), p.data(), q.data(), inv_diag, x, r.data(), z.data());
     rz = sums[0];
     r_norm = std::sqrt(sums[1]);
     exact_now = false;
