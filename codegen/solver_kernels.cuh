@@ -495,6 +495,22 @@ __device__ __forceinline__ void grid_loop(GridPcg<R>& g, int count, const double
   }
 }
 
+// Corner t & 7 of R K R^T e in cell t >> 3 (newmark_apply_cell's corotated_apply) given e
+// at the corner's node, eight lanes per cell: lane c rotates corner c, gets its edge
+// neighbours' rotated vectors and stress columns by warp shuffles, assembles corner c. All
+// 32 lanes of the warp must call it; an invalid lane (past the last cell) reads cell 0.
+template <class R>
+__device__ __forceinline__ Vec3<R> corotated_corner(int t, bool valid, R h, const R* rotation, const R* cell_weights,
+                                                    const R* lambda, const R* mu, Vec3<R> ev) {
+  const int e = valid ? t >> 3 : 0, k = t & 7;
+  const Mat3<R> Rm = ops::load_mat3(rotation, e);
+  const Vec3<R> q = mul_transposed(Rm, ev);
+  const Vec3<R> qn[3] = {shfl_xor3(q, 1), shfl_xor3(q, 2), shfl_xor3(q, 4)};
+  Vec3<R> col[3];
+  ops::element_corner_columns(k, cell_weights[valid ? t : k], lambda[e], mu[e], h, q, qn, col);
+  return Rm * ops::element_corner_assemble(col, shfl_xor3(col[0], 1), shfl_xor3(col[1], 2), shfl_xor3(col[2], 4));
+}
+
 // The time-step system (A + C on the free nodes, identity on fixed ones) in one kernel:
 // per phase the element apply over cell corners (newmark_apply_cell), a grid barrier, the
 // node gather (newmark_apply_node) with the own-node update; r, w, s are updated in place
@@ -519,23 +535,13 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
 #pragma unroll
     for (int k = 0; k < 8; ++k) node_entry[k] = k < node_entries ? node_cell_entry[first + k] : 0;
   }
-  // Corners of R K R^T e per cell for the nodal values e = value(source, node)
-  // (newmark_apply_cell's corotated_apply), eight lanes per cell: lane c rotates corner c,
-  // gets its edge neighbours' rotated vectors and stress columns by warp shuffles,
-  // assembles corner c.
+  // Corners of R K R^T e per cell for the nodal values e = value(source, node).
   auto cells = [&](int source) {
     const int lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
     for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop
       const bool valid = t < lanes;
-      const int e = valid ? t >> 3 : 0, k = t & 7;
       const int nd = !valid ? 0 : t == rank ? corner_node : cell_nodes[t];
-      const Mat3<R> Rm = ops::load_mat3(rotation, e);
-      const Vec3<R> q = mul_transposed(Rm, value(source, nd));
-      const Vec3<R> qn[3] = {shfl_xor3(q, 1), shfl_xor3(q, 2), shfl_xor3(q, 4)};
-      Vec3<R> col[3];
-      ops::element_corner_columns(k, cell_weights[t], lambda[e], mu[e], h, q, qn, col);
-      const Vec3<R> y =
-          Rm * ops::element_corner_assemble(col, shfl_xor3(col[0], 1), shfl_xor3(col[1], 2), shfl_xor3(col[2], 4));
+      const Vec3<R> y = corotated_corner(t, valid, h, rotation, cell_weights, lambda, mu, value(source, nd));
       if (valid) store3(corner, t, y);
     }
     grid_sync(g.bar);
@@ -567,6 +573,122 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
   grid_loop(g, n_node, start, bb, [&](double (&acc)[3]) {
     cells(kSourceNextU);
     for (int n = rank; n < n_node; n += threads) grid_own_update(g, n, g.r, g.w, g.s, g.r, g.w, g.s, node_apply, acc);
+  });
+}
+
+// The same solve with one phase per iteration, for latency (a thread per cell corner; batch 1
+// on the dragon). The corner forces of A u are not gathered into w after a barrier: every
+// corner lane gathers them at its own node from the previous phase's corner buffer, forms
+// w, s, r and u there itself and applies the element to u, so an iteration is one phase and
+// the reduction's barrier. The node's first corner lane (node_cell_entry[node_cell_offset[n]])
+// owns it and stores its r, s, p and x; the others compute the same values with the same
+// code. delta = w.u is summed as a_k (corner force . u) over the corner lanes of free nodes
+// plus the node terms (a_m m u + C u) . u over the owners: the same sum in exact arithmetic
+// as the two-phase form's, in another order. r, s and the corner forces alternate between two
+// buffers (read at other nodes while owners write the next ones); u = M^-1 r is not stored.
+template <class R, class Damping>
+__device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const ops::NewmarkCoefficients<R>& c,
+                                                           int n_cell, int n_node, R h, const R* rotation,
+                                                           const R* cell_weights,
+                                                           const int* cell_nodes, const R* lambda, const R* mu,
+                                                           const R* mass, const R* fixed, Damping damping,
+                                                           const int* node_cell_offset, const int* node_cell_entry,
+                                                           R* corner, R* corner2, R* r2, R* s2) {
+  const int rank = g.rank, threads = g.threads, lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
+  // The thread's first corner keeps its node's incidence in registers for the whole solve.
+  const int own_node = rank < lanes ? cell_nodes[rank] : 0;
+  int own_entry[8], own_entries = 9;
+  if (rank < lanes) {
+    const int first = node_cell_offset[own_node];
+    own_entries = node_cell_offset[own_node + 1] - first;
+#pragma unroll
+    for (int k = 0; k < 8; ++k) own_entry[k] = k < own_entries ? node_cell_entry[first + k] : -1;
+  }
+  // K e at lane t's node m from corner buffer `from` (ops::gather_corner_sum's order).
+  auto gather = [&](const R* from, int t, int m) {
+    if (t != rank || own_entries > 8) return ops::gather_corner_sum(from, node_cell_offset, node_cell_entry, m);
+    Vec3<R> kp = zero3<R>();
+#pragma unroll
+    for (int k = 0; k < 8; ++k)
+      if (k < own_entries) kp += load3(from, own_entry[k]);
+    return kp;
+  };
+  auto owns = [&](int t, int m) {
+    return (t == rank && own_entries <= 8 ? own_entry[0] : node_cell_entry[node_cell_offset[m]]) == t;
+  };
+  // (A + C) e at node m given K e there.
+  auto system = [&](int m, bool is_fixed, Vec3<R> e, Vec3<R> ke) {
+    return is_fixed ? e : newmark_node_apply(c, mass, damping, m, e, ke);
+  };
+  // One phase: start (r = b - A x from the corners of A x in `in`, s = p = 0) or an
+  // iteration (w = A u from `in` and u = M^-1 r_in; s, p, r, x updated with the step and
+  // beta of g); then u = M^-1 r, the corners of A u into `out`, and the sums
+  // {r.u, (A u).u, r.r} (start: and b.b in acc[3]) into acc.
+  auto phase = [&](bool start, const R* in, R* out, const R* r_in, const R* s_in, R* r_out, R* s_out,
+                   double (&acc)[4]) {
+    for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop
+      const bool valid = t < lanes;
+      const int m = !valid ? 0 : t == rank ? own_node : cell_nodes[t];
+      const bool is_fixed = fixed[m] != R(0), owner = valid && owns(t, m);
+      const Vec3<R> inv = load3(g.inv_diag, m), ke = gather(in, t, m);
+      Vec3<R> sn = zero3<R>(), pn = zero3<R>(), rn;
+      if (start) {
+        rn = load3(g.b, m) - system(m, is_fixed, load3(g.x, m), ke);
+      } else {
+        const Vec3<R> rm = load3(r_in, m), um = times(inv, rm);
+        sn = system(m, is_fixed, um, ke) + g.beta * load3(s_in, m);
+        rn = rm - g.step * sn;
+        if (owner) pn = um + g.beta * load3(g.p, m);
+      }
+      const Vec3<R> un = times(inv, rn);
+      const Vec3<R> y = corotated_corner(t, valid, h, rotation, cell_weights, lambda, mu, un);
+      if (!valid) continue;
+      store3(out, t, y);
+      if (!is_fixed) acc[1] += double(c.a_k) * (double(y.x) * double(un.x) + double(y.y) * double(un.y) +
+                                                double(y.z) * double(un.z));
+      if (!owner) continue;
+      store3(r_out, m, rn);
+      store3(s_out, m, sn);
+      store3(g.p, m, pn);
+      if (!start) store3(g.x, m, load3(g.x, m) + g.step * pn);
+      const Vec3<R> node_part = system(m, is_fixed, un, zero3<R>());
+      for (int k = 0; k < 3; ++k) {
+        acc[0] += double(rn[k]) * double(un[k]);
+        acc[1] += double(node_part[k]) * double(un[k]);
+        acc[2] += double(rn[k]) * double(rn[k]);
+      }
+      if (start) {
+        const Vec3<R> bm = load3(g.b, m);
+        for (int k = 0; k < 3; ++k) acc[3] += double(bm[k]) * double(bm[k]);
+      }
+    }
+  };
+  // The corners of A x.
+  for (int t = rank; t < lanes_warps; t += threads) {
+    const bool valid = t < lanes;
+    const int m = !valid ? 0 : t == rank ? own_node : cell_nodes[t];
+    const Vec3<R> y = corotated_corner(t, valid, h, rotation, cell_weights, lambda, mu, load3(g.x, m));
+    if (valid) store3(corner, t, y);
+  }
+  grid_sync(g.bar);
+  R *c_in = corner2, *c_out = corner, *r_in = g.r, *r_out = r2, *s_in = g.s, *s_out = s2;
+  double sums[4] = {0, 0, 0, 0};
+  phase(true, corner, corner2, nullptr, nullptr, g.r, g.s, sums);
+  g.sum(sums);
+  const double start[3] = {sums[0], sums[1], sums[2]};
+  grid_loop(g, n_node, start, sums[3], [&](double (&acc)[3]) {
+    double a4[4] = {0, 0, 0, 0};
+    phase(false, c_in, c_out, r_in, s_in, r_out, s_out, a4);
+    for (int k = 0; k < 3; ++k) acc[k] = a4[k];
+    R* t = c_in;
+    c_in = c_out;
+    c_out = t;
+    t = r_in;
+    r_in = r_out;
+    r_out = t;
+    t = s_in;
+    s_in = s_out;
+    s_out = t;
   });
 }
 

@@ -111,6 +111,26 @@ Snippet newmark_grid_loop(const Graph& g, int op) {
                 ", g_node_cell_offset, g_node_cell_entry, $corner);\n");
 }
 
+// The same system with one phase per iteration (for latency): r, s and the corner forces
+// alternate with r2, s2 and corner2.
+Snippet newmark_grid_one_phase(const Graph& g, int op) {
+  Builder b(g, op, "newmark_pcg_grid_one_phase", Extent::Grid);
+  const std::string damping = bind_damping(g, op, b);
+  b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
+  newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
+  b.scratch("corner", "corner", "Real", Domain::Cell, 24, true, true);
+  b.scratch("corner2", "corner2", "Real", Domain::Cell, 24, true, true);
+  b.vec("r2", true, "3 * n_node", true).vec("s2", true, "3 * n_node", true);
+  grid_solve_params(b, "3 * n_node", "newmark_one_phase");
+  b.stage("whole PCG solve in one cooperative kernel, one phase per iteration (node gathers at the corners)", true);
+  return b.code(std::string(kCoefficients) + grid_state() +
+                "gen::newmark_pcg_grid_one_phase<Real>(pcg, c, n_cell, n_node, h, $rotation, g_cell_weights, "
+                "g_cell_nodes,\n"
+                "                                      $lambda, $mu, $mass, $fixed, " + damping +
+                ", g_node_cell_offset, g_node_cell_entry,\n"
+                "                                      $corner, $corner2, v_r2, v_s2);\n");
+}
+
 // The band Laplacian, one phase per iteration: r, w, s alternate with r2, w2, s2.
 Snippet extension_grid_loop(const Graph& g, int op) {
   Builder b(g, op, "extension_pcg_grid", Extent::Grid);
@@ -186,6 +206,7 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   }
   for (Snippet& p : pcg_snippets(g, op)) s.push_back(p);
   s.push_back(newmark_grid_loop(g, op));
+  s.push_back(newmark_grid_one_phase(g, op));
   return s;
 }
 

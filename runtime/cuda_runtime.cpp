@@ -304,6 +304,7 @@ void GpuTimestep::Impl::decide_grid_solves() {
     fits &= per_sm * multiprocessors >= batch;
   }
   grid_solves = fits && !grid_capacity.empty();
+  decide_newmark_grid();
   const PlannedKernel* one_phase = plan.find(false, "extension_pcg_grid");
   if (!grid_solves || !one_phase) return;  // a graph without the extension has no choice to make
   int phases = options.extension_phases;
@@ -313,6 +314,22 @@ void GpuTimestep::Impl::decide_grid_solves() {
   if (phases != 1 && phases != 2)
     phases = 2L * grid_blocks(*one_phase, sizes.band) * kGridBlock <= sizes.band ? 2 : 1;
   extension_grid = phases == 2 ? "extension_pcg_grid_two_phase" : "extension_pcg_grid";
+}
+
+// The time-step system's grid kernel: one phase per iteration where every cell corner has a
+// thread (its extra loads, the node gathers, hide behind the barrier it saves), two where
+// threads loop over corners. One phase needs every node in some cell (its owner is a corner).
+void GpuTimestep::Impl::decide_newmark_grid() {
+  newmark_grid = "newmark_pcg_grid";
+  const PlannedKernel* one_phase = plan.find(false, "newmark_pcg_grid_one_phase");
+  if (!grid_solves || !one_phase) return;
+  int phases = options.newmark_phases;
+  if (const char* e = std::getenv("SSC_GPU_NEWMARK_PHASES")) phases = std::atoi(e);
+  const long corners = 8L * sizes.cell;
+  if (phases != 1 && phases != 2) phases = long(grid_blocks(*one_phase, corners)) * kGridBlock >= corners ? 1 : 2;
+  for (size_t n = 0; n + 1 < grid.node_cell_offset.size(); ++n)
+    if (grid.node_cell_offset[n + 1] == grid.node_cell_offset[n]) phases = 2;
+  if (phases == 1) newmark_grid = "newmark_pcg_grid_one_phase";
 }
 
 // The persistent solves' register cap. Uncapped (over 128 registers), they hold one block per

@@ -4,7 +4,8 @@
 // Forward: newmark_init, diag, setup, then PCG with the element apply (cell kernel,
 // node gather) on u; the extension: setup (rhs from the active neighbours, the guess),
 // PCG with the band Laplacian on band_u. Each PCG is one persistent grid kernel
-// (newmark_pcg_grid; extension_pcg_grid, or its two-phase form for large batches) when
+// (newmark_pcg_grid or its one-phase form for batch 1; extension_pcg_grid, or its two-phase
+// form for large batches) when
 // grid solves are on, whose outcomes the host reads after the step; else the host-driven
 // iteration kernels.
 // Where the extension is one dense product (runtime/band_operator.h), it is a single
@@ -70,7 +71,7 @@ void GpuTimestep::Impl::newmark(int o) {
   launch(kernel("newmark_init", false, o));
   newmark_setup(o, rhs, u, false);
   if (grid_solves) {
-    grid_pcg(kernel("newmark_pcg_grid", false, o), u, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
+    grid_pcg(kernel(newmark_grid, false, o), u, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
              solver.cg_max_iterations, tensors.at(op.output("cg_iterations")).ptr, "time-step solve", &cg_iterations,
              0);
     return;
@@ -150,7 +151,7 @@ void GpuTimestep::Impl::adjoint_newmark(int o) {
   adjoint_reference_set = true;
   newmark_setup(o, adjoints.at(op.output("u")).ptr, w, !(reference_mode == 1 && warm_adjoint_solves));
   if (grid_solves) {
-    grid_pcg(kernel("newmark_pcg_grid", false, o), w, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
+    grid_pcg(kernel(newmark_grid, false, o), w, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
              solver.cg_max_iterations, scratch.at("v_iterations_sink").ptr, "adjoint time-step solve",
              &adjoint_cg_iterations, reference_mode);
     return;

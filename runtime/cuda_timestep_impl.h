@@ -115,6 +115,7 @@ struct GpuTimestep::Impl {
   int grid_min_blocks = 1;  // the grid kernels' second __launch_bounds__ argument
   std::map<std::string, int> grid_capacity;  // per grid kernel: resident blocks on the device
   std::string extension_grid;                 // the extension's grid kernel (GpuOptions::extension_phases)
+  std::string newmark_grid = "newmark_pcg_grid";  // the time-step system's grid kernel (GpuOptions::newmark_phases)
   // The extension as one product (GpuOptions::dense_extension), uploaded as g_band_operator
   // and g_band_sources; nullptr: the PCG.
   std::shared_ptr<const BandExtensionOperator> dense_extension;
@@ -151,6 +152,7 @@ struct GpuTimestep::Impl {
   std::vector<int> pcg(cu::DevicePtr x, long len, double tol, int max_it, const Apply& apply, const char* what,
                        const std::string& tag, int reference_mode);
   void decide_grid_solves();
+  void decide_newmark_grid();  // in decide_grid_solves, once the capacities are known
   unsigned grid_blocks(const PlannedKernel& k, long work) const;
   // cuCtxSynchronize, which must not meet another thread's stream capture on this GPU: the
   // simulations of one process share each GPU's context (diagnose's fits side by side), and a
