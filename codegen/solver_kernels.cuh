@@ -426,20 +426,21 @@ __device__ __forceinline__ void grid_start_sums(GridPcg<R>& g, int count, const 
 
 // The own-node update of one iteration at node n: s, p, x, r, u from the previous r, w,
 // s, and w = w_of_u(n, u) = A u; written to r_out, w_out, s_out (which may be r, w, s);
-// the node's sums into acc.
+// the node's sums into acc. u is not stored: p's u = M^-1 r is recomputed from the stored r
+// (z holds the start's u only).
 template <class R, class WofU>
 __device__ __forceinline__ void grid_own_update(GridPcg<R>& g, int n, const R* r, const R* w, const R* s, R* r_out,
                                                 R* w_out, R* s_out, WofU w_of_u, double (&acc)[3]) {
+  const Vec3<R> inv = load3(g.inv_diag, n), rn_old = load3(r, n);
   const Vec3<R> sn = load3(w, n) + g.beta * load3(s, n);
-  const Vec3<R> pn = load3(g.z, n) + g.beta * load3(g.p, n);
-  const Vec3<R> rn = load3(r, n) - g.step * sn;
-  const Vec3<R> un = times(load3(g.inv_diag, n), rn);
+  const Vec3<R> pn = times(inv, rn_old) + g.beta * load3(g.p, n);  // u = M^-1 r: the bits stored as z before
+  const Vec3<R> rn = rn_old - g.step * sn;
+  const Vec3<R> un = times(inv, rn);
   const Vec3<R> wn = w_of_u(n, un);
   store3(g.x, n, load3(g.x, n) + g.step * pn);
   store3(s_out, n, sn);
   store3(g.p, n, pn);
   store3(r_out, n, rn);
-  store3(g.z, n, un);
   store3(w_out, n, wn);
   add_pcg_sums(acc, rn, un, wn);
 }

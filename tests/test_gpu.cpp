@@ -386,6 +386,24 @@ TEST(GpuExtension, OneAndTwoPhaseGridSolvesGiveTheSameBits) {
   for (size_t t = 0; t < da.size(); ++t) EXPECT_TRUE(da[t] == db[t]) << "cotangent " << t;
 }
 
+// The time-step system's two grid solves (one phase per iteration, the node gathers at the
+// cell corners, for latency; two, the element apply and the node gather, for throughput)
+// are the same PCG iterates in another order of sums: each against the interpreter, forward
+// and adjoint, in double and float.
+TEST(GpuForward, OneAndTwoPhaseTimeStepSolvesMatchTheInterpreter) {
+  SKIP_WITHOUT_GPU();
+  test_cache_root();
+  for (int phases : {1, 2}) {
+    SCOPED_TRACE(fmt::format("{} phase(s) per iteration", phases));
+    GpuOptions go;
+    go.newmark_phases = phases;
+    gpu_vs_interpreter("double", 1e-10, go);
+    gpu_vs_interpreter("float", 1e-4, go);
+    adjoint_vs_interpreter("double", 1e-10, go);
+    adjoint_vs_interpreter("float", 1e-3, go);
+  }
+}
+
 // A whole trajectory (12 steps, frames at 4, 8 and 12, contact, checkpointing every 5
 // steps) with a cost linear in u and quadratic in the band: the GPU backward pass against
 // the interpreter's, per parameter.
