@@ -496,21 +496,35 @@ __device__ __forceinline__ void grid_loop(GridPcg<R>& g, int count, const double
   }
 }
 
-// Corner t & 7 of R K R^T e in cell t >> 3 (newmark_apply_cell's corotated_apply) given e
-// at the corner's node, eight lanes per cell: lane c rotates corner c, gets its edge
-// neighbours' rotated vectors and stress columns by warp shuffles, assembles corner c. All
-// 32 lanes of the warp must call it; an invalid lane (past the last cell) reads cell 0.
+// Corner t & 7 of cell t >> 3 as the element apply needs it: the cell's rotation, Lame
+// parameters and the corner's weight (an invalid lane, past the last cell, reads cell 0).
 template <class R>
-__device__ __forceinline__ Vec3<R> corotated_corner(int t, bool valid, R h, const R* rotation, const R* cell_weights,
-                                                    const R* lambda, const R* mu, Vec3<R> ev) {
-  const int e = valid ? t >> 3 : 0, k = t & 7;
-  const Mat3<R> Rm = ops::load_mat3(rotation, e);
-  const Vec3<R> q = mul_transposed(Rm, ev);
-  const Vec3<R> qn[3] = {shfl_xor3(q, 1), shfl_xor3(q, 2), shfl_xor3(q, 4)};
-  Vec3<R> col[3];
-  ops::element_corner_columns(k, cell_weights[valid ? t : k], lambda[e], mu[e], h, q, qn, col);
-  return Rm * ops::element_corner_assemble(col, shfl_xor3(col[0], 1), shfl_xor3(col[1], 2), shfl_xor3(col[2], 4));
-}
+struct CornerElement {
+  Mat3<R> rotation;
+  R weight, lambda, mu;
+  int corner;
+  __device__ __forceinline__ CornerElement(int t, bool valid, const R* rotations, const R* cell_weights,
+                                           const R* lambdas, const R* mus)
+      : corner(t & 7) {
+    const int e = valid ? t >> 3 : 0;
+    rotation = ops::load_mat3(rotations, e);
+    weight = cell_weights[valid ? t : corner];
+    lambda = lambdas[e];
+    mu = mus[e];
+  }
+  // The corner of R K R^T e (newmark_apply_cell's corotated_apply) given e at the corner's
+  // node, eight lanes per cell: lane c rotates corner c, gets its edge neighbours' rotated
+  // vectors and stress columns by warp shuffles, assembles corner c. All 32 lanes of the
+  // warp must call it.
+  __device__ __forceinline__ Vec3<R> apply(R h, Vec3<R> ev) const {
+    const Vec3<R> q = mul_transposed(rotation, ev);
+    const Vec3<R> qn[3] = {shfl_xor3(q, 1), shfl_xor3(q, 2), shfl_xor3(q, 4)};
+    Vec3<R> col[3];
+    ops::element_corner_columns(corner, weight, lambda, mu, h, q, qn, col);
+    return rotation *
+           ops::element_corner_assemble(col, shfl_xor3(col[0], 1), shfl_xor3(col[1], 2), shfl_xor3(col[2], 4));
+  }
+};
 
 // The time-step system (A + C on the free nodes, identity on fixed ones) in one kernel:
 // per phase the element apply over cell corners (newmark_apply_cell), a grid barrier, the
@@ -542,7 +556,7 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
     for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop
       const bool valid = t < lanes;
       const int nd = !valid ? 0 : t == rank ? corner_node : cell_nodes[t];
-      const Vec3<R> y = corotated_corner(t, valid, h, rotation, cell_weights, lambda, mu, value(source, nd));
+      const Vec3<R> y = CornerElement<R>(t, valid, rotation, cell_weights, lambda, mu).apply(h, value(source, nd));
       if (valid) store3(corner, t, y);
     }
     grid_sync(g.bar);
@@ -577,99 +591,126 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
   });
 }
 
+// What a corner lane of the one-phase solve reads that stays fixed for the whole solve: its
+// cell's element, its node with the node's Jacobi diagonal, mass and fixed flag, whether the
+// lane owns the node (the node's first corner entry, node_cell_entry[node_cell_offset[n]]),
+// and the node's corner entries (up to 8; more are read from the arrays).
+template <class R>
+struct CornerLane {
+  CornerElement<R> element;
+  Vec3<R> inv;
+  R mass;
+  int node, entries, entry[8];
+  bool valid, fixed, owner;
+  __device__ __forceinline__ CornerLane(int t, int lanes, const R* rotation, const R* cell_weights,
+                                        const R* lambda, const R* mu, const int* cell_nodes, const R* inv_diag,
+                                        const R* masses, const R* fixed_flags, const int* node_cell_offset,
+                                        const int* node_cell_entry)
+      : element(t, t < lanes, rotation, cell_weights, lambda, mu), valid(t < lanes) {
+    node = valid ? cell_nodes[t] : 0;
+    inv = load3(inv_diag, node);
+    mass = masses[node];
+    fixed = fixed_flags[node] != R(0);
+    const int first = node_cell_offset[node];
+    entries = node_cell_offset[node + 1] - first;
+#pragma unroll
+    for (int k = 0; k < 8; ++k) entry[k] = k < entries ? node_cell_entry[first + k] : 0;
+    owner = valid && node_cell_entry[first] == t;
+  }
+  // K e at the lane's node from a corner buffer (ops::gather_corner_sum's order).
+  __device__ __forceinline__ Vec3<R> gather(const R* from, const int* node_cell_offset,
+                                            const int* node_cell_entry) const {
+    if (entries > 8) return ops::gather_corner_sum(from, node_cell_offset, node_cell_entry, node);
+    Vec3<R> kp = zero3<R>();
+#pragma unroll
+    for (int k = 0; k < 8; ++k)
+      if (k < entries) kp += load3(from, entry[k]);
+    return kp;
+  }
+};
+
 // The same solve with one phase per iteration, for latency (a thread per cell corner; batch 1
 // on the dragon). The corner forces of A u are not gathered into w after a barrier: every
 // corner lane gathers them at its own node from the previous phase's corner buffer, forms
 // w, s, r and u there itself and applies the element to u, so an iteration is one phase and
-// the reduction's barrier. The node's first corner lane (node_cell_entry[node_cell_offset[n]])
-// owns it and stores its r, s, p and x; the others compute the same values with the same
-// code. delta = w.u is summed as a_k (corner force . u) over the corner lanes of free nodes
-// plus the node terms (a_m m u + C u) . u over the owners: the same sum in exact arithmetic
-// as the two-phase form's, in another order. r, s and the corner forces alternate between two
-// buffers (read at other nodes while owners write the next ones); u = M^-1 r is not stored.
+// the reduction's barrier. The node's first corner lane owns it and stores its r, s, p and
+// x; the others compute the same values with the same code. delta = w.u is summed as
+// a_k (corner force . u) over the corner lanes of free nodes plus the node terms
+// (a_m m u + C u) . u over the owners: the same sum in exact arithmetic as the two-phase
+// form's, in another order. r, s and the corner forces alternate between two buffers (read
+// at other nodes while owners write the next ones); u = M^-1 r is not stored. The thread's
+// first corner lane stays in registers for the whole solve; further ones (small grids) are
+// read each phase.
 template <class R, class Damping>
 __device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const ops::NewmarkCoefficients<R>& c,
                                                            int n_cell, int n_node, R h, const R* rotation,
-                                                           const R* cell_weights,
-                                                           const int* cell_nodes, const R* lambda, const R* mu,
-                                                           const R* mass, const R* fixed, Damping damping,
+                                                           const R* cell_weights, const int* cell_nodes,
+                                                           const R* lambda, const R* mu, const R* mass,
+                                                           const R* fixed, Damping damping,
                                                            const int* node_cell_offset, const int* node_cell_entry,
                                                            R* corner, R* corner2, R* r2, R* s2) {
   const int rank = g.rank, threads = g.threads, lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
-  // The thread's first corner keeps its node's incidence in registers for the whole solve.
-  const int own_node = rank < lanes ? cell_nodes[rank] : 0;
-  int own_entry[8], own_entries = 9;
-  if (rank < lanes) {
-    const int first = node_cell_offset[own_node];
-    own_entries = node_cell_offset[own_node + 1] - first;
-#pragma unroll
-    for (int k = 0; k < 8; ++k) own_entry[k] = k < own_entries ? node_cell_entry[first + k] : -1;
-  }
-  // K e at lane t's node m from corner buffer `from` (ops::gather_corner_sum's order).
-  auto gather = [&](const R* from, int t, int m) {
-    if (t != rank || own_entries > 8) return ops::gather_corner_sum(from, node_cell_offset, node_cell_entry, m);
-    Vec3<R> kp = zero3<R>();
-#pragma unroll
-    for (int k = 0; k < 8; ++k)
-      if (k < own_entries) kp += load3(from, own_entry[k]);
-    return kp;
+  auto lane = [&](int t) {
+    return CornerLane<R>(t, lanes, rotation, cell_weights, lambda, mu, cell_nodes, g.inv_diag, mass, fixed,
+                         node_cell_offset, node_cell_entry);
   };
-  auto owns = [&](int t, int m) {
-    return (t == rank && own_entries <= 8 ? own_entry[0] : node_cell_entry[node_cell_offset[m]]) == t;
+  const CornerLane<R> own = lane(rank);
+  // (A + C) e at the lane's node given K e there.
+  auto system = [&](const CornerLane<R>& L, Vec3<R> e, Vec3<R> ke) {
+    return L.fixed ? e : add_damping(ops::newmark_system_apply(c, L.mass, e, ke), damping, L.node, e);
   };
-  // (A + C) e at node m given K e there.
-  auto system = [&](int m, bool is_fixed, Vec3<R> e, Vec3<R> ke) {
-    return is_fixed ? e : newmark_node_apply(c, mass, damping, m, e, ke);
+  // One lane of a phase: start (r = b - A x from the corners of A x in `in`, s = p = 0) or
+  // an iteration (w = A u from `in` and u = M^-1 r_in; s, p, r, x updated with the step and
+  // beta of g); then u = M^-1 r, the corners of A u into `out`, and the sums {r.u, (A u).u,
+  // r.r} (start: and b.b in acc[3]) into acc.
+  auto work = [&](int t, const CornerLane<R>& L, bool start, const R* in, R* out, const R* r_in, const R* s_in,
+                  R* r_out, R* s_out, double (&acc)[4]) {
+    const int m = L.node;
+    const Vec3<R> ke = L.gather(in, node_cell_offset, node_cell_entry);
+    Vec3<R> sn = zero3<R>(), pn = zero3<R>(), rn;
+    if (start) {
+      rn = load3(g.b, m) - system(L, load3(g.x, m), ke);
+    } else {
+      const Vec3<R> rm = load3(r_in, m), um = times(L.inv, rm);
+      sn = system(L, um, ke) + g.beta * load3(s_in, m);
+      rn = rm - g.step * sn;
+      if (L.owner) pn = um + g.beta * load3(g.p, m);
+    }
+    const Vec3<R> un = times(L.inv, rn);
+    const Vec3<R> y = L.element.apply(h, un);
+    if (!L.valid) return;
+    store3(out, t, y);
+    if (!L.fixed)
+      acc[1] += double(c.a_k) * (double(y.x) * double(un.x) + double(y.y) * double(un.y) + double(y.z) * double(un.z));
+    if (!L.owner) return;
+    store3(r_out, m, rn);
+    store3(s_out, m, sn);
+    store3(g.p, m, pn);
+    if (!start) store3(g.x, m, load3(g.x, m) + g.step * pn);
+    const Vec3<R> node_part = system(L, un, zero3<R>());
+    for (int k = 0; k < 3; ++k) {
+      acc[0] += double(rn[k]) * double(un[k]);
+      acc[1] += double(node_part[k]) * double(un[k]);
+      acc[2] += double(rn[k]) * double(rn[k]);
+    }
+    if (start) {
+      const Vec3<R> bm = load3(g.b, m);
+      for (int k = 0; k < 3; ++k) acc[3] += double(bm[k]) * double(bm[k]);
+    }
   };
-  // One phase: start (r = b - A x from the corners of A x in `in`, s = p = 0) or an
-  // iteration (w = A u from `in` and u = M^-1 r_in; s, p, r, x updated with the step and
-  // beta of g); then u = M^-1 r, the corners of A u into `out`, and the sums
-  // {r.u, (A u).u, r.r} (start: and b.b in acc[3]) into acc.
+  // t == rank on every thread of a warp at once (the first pass), so the branch is uniform.
   auto phase = [&](bool start, const R* in, R* out, const R* r_in, const R* s_in, R* r_out, R* s_out,
                    double (&acc)[4]) {
     for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop
-      const bool valid = t < lanes;
-      const int m = !valid ? 0 : t == rank ? own_node : cell_nodes[t];
-      const bool is_fixed = fixed[m] != R(0), owner = valid && owns(t, m);
-      const Vec3<R> inv = load3(g.inv_diag, m), ke = gather(in, t, m);
-      Vec3<R> sn = zero3<R>(), pn = zero3<R>(), rn;
-      if (start) {
-        rn = load3(g.b, m) - system(m, is_fixed, load3(g.x, m), ke);
-      } else {
-        const Vec3<R> rm = load3(r_in, m), um = times(inv, rm);
-        sn = system(m, is_fixed, um, ke) + g.beta * load3(s_in, m);
-        rn = rm - g.step * sn;
-        if (owner) pn = um + g.beta * load3(g.p, m);
-      }
-      const Vec3<R> un = times(inv, rn);
-      const Vec3<R> y = corotated_corner(t, valid, h, rotation, cell_weights, lambda, mu, un);
-      if (!valid) continue;
-      store3(out, t, y);
-      if (!is_fixed) acc[1] += double(c.a_k) * (double(y.x) * double(un.x) + double(y.y) * double(un.y) +
-                                                double(y.z) * double(un.z));
-      if (!owner) continue;
-      store3(r_out, m, rn);
-      store3(s_out, m, sn);
-      store3(g.p, m, pn);
-      if (!start) store3(g.x, m, load3(g.x, m) + g.step * pn);
-      const Vec3<R> node_part = system(m, is_fixed, un, zero3<R>());
-      for (int k = 0; k < 3; ++k) {
-        acc[0] += double(rn[k]) * double(un[k]);
-        acc[1] += double(node_part[k]) * double(un[k]);
-        acc[2] += double(rn[k]) * double(rn[k]);
-      }
-      if (start) {
-        const Vec3<R> bm = load3(g.b, m);
-        for (int k = 0; k < 3; ++k) acc[3] += double(bm[k]) * double(bm[k]);
-      }
+      if (t == rank) work(t, own, start, in, out, r_in, s_in, r_out, s_out, acc);
+      else work(t, lane(t), start, in, out, r_in, s_in, r_out, s_out, acc);
     }
   };
   // The corners of A x.
   for (int t = rank; t < lanes_warps; t += threads) {
-    const bool valid = t < lanes;
-    const int m = !valid ? 0 : t == rank ? own_node : cell_nodes[t];
-    const Vec3<R> y = corotated_corner(t, valid, h, rotation, cell_weights, lambda, mu, load3(g.x, m));
-    if (valid) store3(corner, t, y);
+    const CornerLane<R> L = t == rank ? own : lane(t);
+    const Vec3<R> y = L.element.apply(h, load3(g.x, L.node));
+    if (L.valid) store3(corner, t, y);
   }
   grid_sync(g.bar);
   R *c_in = corner2, *c_out = corner, *r_in = g.r, *r_out = r2, *s_in = g.s, *s_out = s2;
