@@ -54,7 +54,7 @@ SSC_HD inline void plane_friction(const GroundPlane<Real>& g, Real mu, Real eps,
 
 // Adjoint of plane_friction for the cotangents f_bar and C_bar (of the 6 stored values).
 // With G the symmetric matrix whose entries give <G, dC> = sum_k C_bar[k] dC[k] (the
-// off-diagonal ones C_bar / 2), q = mu N and GP = <G, P> = tr G - n.Gn (C = q P / s, f = -q w / s):
+// off-diagonal ones C_bar / 2), q = mu N and GP = <G, P> (C = q P / s, f = -q w / s):
 //   q_bar = (GP - f_bar.w) / s,  s_bar = q (f_bar.w - GP) / s^2,
 //   w_bar = -q / s f_bar + s_bar w / s,  n_bar = -2 q / s G n + (from w, d).
 template <class Real>
@@ -71,7 +71,12 @@ SSC_HD inline void adj_plane_friction(const GroundPlane<Real>& g, Real mu, Real 
   const Vec3<Real> w = v - nv * n;
   const Real s = sqrt(dot(w, w) + eps * eps);
   const Vec3<Real> Gn = sym3_cotangent_apply(C_bar, n);
-  const Real GP = C_bar[0] + C_bar[1] + C_bar[2] - dot(n, Gn);
+  // <G, P> summed over P's entries as plane_friction stores them, not as tr G - n.Gn: C_bar's
+  // part along n n^T, which <G, P> does not contain, was up to 1.2e8 times the tangential one
+  // on the random torus step (tests/test_gpu_kernels.cpp), and that difference in float kept
+  // little of it (the friction values' cotangents off by up to 3.7e-3, v_prev's by 9.3e-4).
+  const Real GP = C_bar[0] * (Real(1) - n.x * n.x) + C_bar[1] * (Real(1) - n.y * n.y) +
+                  C_bar[2] * (Real(1) - n.z * n.z) - C_bar[3] * n.x * n.y - C_bar[4] * n.x * n.z - C_bar[5] * n.y * n.z;
   const Real fw = dot(f_bar, w);
   const Real q_bar = (GP - fw) / s;
   const Real s_bar = q * (fw - GP) / (s * s);
