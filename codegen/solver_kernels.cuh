@@ -591,6 +591,103 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
   });
 }
 
+// The same solve for throughput, where threads loop over several cell corners (large
+// batches), with u = M^-1 r stored by the node update: the cell phase reads u at a corner's
+// node (one vector where newmark_pcg_grid evaluates it from three), and delta = w.u is summed
+// as in the one-phase form (a_k corner force . u over the corners, the node terms over the
+// nodes; a fixed node's u is 0), so the reduction comes right after the cell phase and the node
+// update needs no stored w. An iteration: the node update (w = A u gathered; s, p, x, r, u;
+// gamma, |r|^2 and delta's node part of the new u), a grid barrier, the corners of A u (and
+// delta's corner part), the reduction.
+template <class R, class Damping>
+__device__ __forceinline__ void newmark_pcg_grid_stored_u(GridPcg<R>& g, const ops::NewmarkCoefficients<R>& c,
+                                                          int n_cell, int n_node, R h, const R* rotation,
+                                                          const R* cell_weights, const int* cell_nodes,
+                                                          const R* lambda, const R* mu, const R* mass, const R* fixed,
+                                                          Damping damping, const int* node_cell_offset,
+                                                          const int* node_cell_entry, R* corner) {
+  const int rank = g.rank, threads = g.threads, lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
+  // The thread's first cell corner and node keep their incidence in registers.
+  const int corner_node = rank < lanes ? cell_nodes[rank] : 0;
+  int node_entry[8], node_entries = 9;
+  if (rank < n_node) {
+    const int first = node_cell_offset[rank];
+    node_entries = node_cell_offset[rank + 1] - first;
+#pragma unroll
+    for (int k = 0; k < 8; ++k) node_entry[k] = k < node_entries ? node_cell_entry[first + k] : 0;
+  }
+  auto gather = [&](int n) {
+    if (n != rank || node_entries > 8) return ops::gather_corner_sum(corner, node_cell_offset, node_cell_entry, n);
+    Vec3<R> kp = zero3<R>();
+#pragma unroll
+    for (int k = 0; k < 8; ++k)
+      if (k < node_entries) kp += load3(corner, node_entry[k]);
+    return kp;
+  };
+  // (A + C) e at node n given K e there.
+  auto system = [&](int n, Vec3<R> e, Vec3<R> ke) {
+    return fixed[n] != R(0) ? e : newmark_node_apply(c, mass, damping, n, e, ke);
+  };
+  // The corners of A e for the nodal values e in `from`; a_k (corner force . e) into delta.
+  auto cells = [&](const R* from, double& delta) {
+    for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop
+      const bool valid = t < lanes;
+      const int nd = !valid ? 0 : t == rank ? corner_node : cell_nodes[t];
+      const Vec3<R> e = load3(from, nd);
+      const Vec3<R> y = CornerElement<R>(t, valid, rotation, cell_weights, lambda, mu).apply(h, e);
+      if (!valid) continue;
+      store3(corner, t, y);
+      delta += double(c.a_k) * (double(y.x) * double(e.x) + double(y.y) * double(e.y) + double(y.z) * double(e.z));
+    }
+  };
+  // Node n's sums of the new r and u: gamma, delta's node part, |r|^2.
+  auto node_sums = [&](int n, Vec3<R> rn, Vec3<R> un, double (&acc)[3]) {
+    const Vec3<R> node_part = system(n, un, zero3<R>());
+    for (int k = 0; k < 3; ++k) {
+      acc[0] += double(rn[k]) * double(un[k]);
+      acc[1] += double(node_part[k]) * double(un[k]);
+      acc[2] += double(rn[k]) * double(rn[k]);
+    }
+  };
+  double unused = 0;
+  cells(g.x, unused);
+  grid_sync(g.bar);
+  double sums[4] = {0, 0, 0, 0};
+  for (int n = rank; n < n_node; n += threads) {
+    const Vec3<R> bn = load3(g.b, n), rn = bn - system(n, load3(g.x, n), gather(n));
+    const Vec3<R> un = times(load3(g.inv_diag, n), rn);
+    store3(g.r, n, rn);
+    store3(g.z, n, un);
+    store3(g.s, n, zero3<R>());
+    store3(g.p, n, zero3<R>());
+    double acc[3] = {0, 0, 0};
+    node_sums(n, rn, un, acc);
+    for (int k = 0; k < 3; ++k) sums[k] += acc[k];
+    for (int k = 0; k < 3; ++k) sums[3] += double(bn[k]) * double(bn[k]);
+  }
+  grid_sync(g.bar);
+  cells(g.z, sums[1]);
+  g.sum(sums);
+  const double start[3] = {sums[0], sums[1], sums[2]};
+  grid_loop(g, n_node, start, sums[3], [&](double (&acc)[3]) {
+    for (int n = rank; n < n_node; n += threads) {
+      const Vec3<R> inv = load3(g.inv_diag, n), um = load3(g.z, n);
+      const Vec3<R> sn = system(n, um, gather(n)) + g.beta * load3(g.s, n);
+      const Vec3<R> pn = um + g.beta * load3(g.p, n);
+      const Vec3<R> rn = load3(g.r, n) - g.step * sn;
+      const Vec3<R> un = times(inv, rn);
+      store3(g.x, n, load3(g.x, n) + g.step * pn);
+      store3(g.s, n, sn);
+      store3(g.p, n, pn);
+      store3(g.r, n, rn);
+      store3(g.z, n, un);
+      node_sums(n, rn, un, acc);
+    }
+    grid_sync(g.bar);
+    cells(g.z, acc[1]);
+  });
+}
+
 // What a corner lane of the one-phase solve reads that stays fixed for the whole solve: its
 // cell's element, its node with the node's Jacobi diagonal, mass and fixed flag, whether the
 // lane owns the node (the node's first corner entry, node_cell_entry[node_cell_offset[n]]),

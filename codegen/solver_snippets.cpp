@@ -131,6 +131,22 @@ Snippet newmark_grid_one_phase(const Graph& g, int op) {
                 "                                      $corner, $corner2, v_r2, v_s2);\n");
 }
 
+// The same system for throughput, u stored by the node update and read by the cell phase.
+Snippet newmark_grid_stored_u(const Graph& g, int op) {
+  Builder b(g, op, "newmark_pcg_grid_stored_u", Extent::Grid);
+  const std::string damping = bind_damping(g, op, b);
+  b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
+  newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
+  b.scratch("corner", "corner", "Real", Domain::Cell, 24, true, true);
+  grid_solve_params(b, "3 * n_node", "newmark_stored_u");
+  b.stage("whole PCG solve in one cooperative kernel: node update storing u, element apply of u (grid barriers)", true);
+  return b.code(std::string(kCoefficients) + grid_state() +
+                "gen::newmark_pcg_grid_stored_u<Real>(pcg, c, n_cell, n_node, h, $rotation, g_cell_weights, "
+                "g_cell_nodes,\n"
+                "                                     $lambda, $mu, $mass, $fixed, " + damping +
+                ", g_node_cell_offset, g_node_cell_entry, $corner);\n");
+}
+
 // The band Laplacian, one phase per iteration: r, w, s alternate with r2, w2, s2.
 Snippet extension_grid_loop(const Graph& g, int op) {
   Builder b(g, op, "extension_pcg_grid", Extent::Grid);
@@ -207,6 +223,7 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   for (Snippet& p : pcg_snippets(g, op)) s.push_back(p);
   s.push_back(newmark_grid_loop(g, op));
   s.push_back(newmark_grid_one_phase(g, op));
+  s.push_back(newmark_grid_stored_u(g, op));
   return s;
 }
 

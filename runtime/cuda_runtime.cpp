@@ -326,10 +326,11 @@ void GpuTimestep::Impl::decide_newmark_grid() {
   int phases = options.newmark_phases;
   if (const char* e = std::getenv("SSC_GPU_NEWMARK_PHASES")) phases = std::atoi(e);
   const long corners = 8L * sizes.cell;
-  if (phases != 1 && phases != 2) phases = long(grid_blocks(*one_phase, corners)) * kGridBlock >= corners ? 1 : 2;
+  if (phases < 1 || phases > 3) phases = long(grid_blocks(*one_phase, corners)) * kGridBlock >= corners ? 1 : 2;
   for (size_t n = 0; n + 1 < grid.node_cell_offset.size(); ++n)
-    if (grid.node_cell_offset[n + 1] == grid.node_cell_offset[n]) phases = 2;
+    if (phases == 1 && grid.node_cell_offset[n + 1] == grid.node_cell_offset[n]) phases = 2;
   if (phases == 1) newmark_grid = "newmark_pcg_grid_one_phase";
+  if (phases == 3) newmark_grid = "newmark_pcg_grid_stored_u";
 }
 
 // The persistent solves' register cap. Uncapped (over 128 registers), they hold one block per
