@@ -526,86 +526,39 @@ struct CornerElement {
   }
 };
 
-// The time-step system (A + C on the free nodes, identity on fixed ones) in one kernel:
-// per phase the element apply over cell corners (newmark_apply_cell), a grid barrier, the
-// node gather (newmark_apply_node) with the own-node update; r, w, s are updated in place
-// (the cell phase that reads them at other nodes is over when the node phase writes).
+// A grid solve's setup (newmark_diag and newmark_setup of the host-driven sequence): the
+// corners of the stiffness diagonal, a grid barrier, per node the Jacobi diagonal, the
+// masked right-hand side and x = 0 on fixed nodes (everywhere with zero_x), a grid barrier.
+template <class R, class Damping>
+__device__ __forceinline__ void newmark_grid_setup(GridPcg<R>& g, const ops::NewmarkCoefficients<R>& c, int n_cell,
+                                                   int n_node, R h, const R* rotation, const R* cell_weights,
+                                                   const int*, const R* lambda, const R* mu, const R* mass,
+                                                   const R* fixed, Damping damping, const int* node_cell_offset,
+                                                   const int* node_cell_entry, const R* rhs, int zero_x, R* b,
+                                                   R* inv_diag, R* corner) {
+  for (int t = g.rank; t < 8 * n_cell; t += g.threads)
+    newmark_diagonal_corner(t, h, rotation, cell_weights, lambda, mu, corner);
+  grid_sync(g.bar);
+  for (int n = g.rank; n < n_node; n += g.threads)
+    newmark_setup(n, c, mass, fixed, damping, corner, node_cell_offset, node_cell_entry, rhs, zero_x, g.x, b, inv_diag);
+  grid_sync(g.bar);
+}
+
+// The time-step system (A + C on the free nodes, identity on fixed ones) in one kernel, two
+// phases per iteration, for throughput (threads loop over several cell corners; batches of
+// more than one): the node update (w = A u gathered from the corners; s, p, x, r and u =
+// M^-1 r stored; gamma, |r|^2 and delta's node part of the new u), a grid barrier, the
+// corners of A u with u read at each corner's node (one vector, where evaluating it from the
+// last r, w and s would read three) and delta's corner part, the reduction. delta = w.u is
+// summed as a_k (corner force . u) over the corners plus the node terms (a_m m u + C u) . u
+// over the nodes (a fixed node's u is 0), so the reduction can follow the cell phase and no w
+// is stored.
 template <class R, class Damping>
 __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::NewmarkCoefficients<R>& c, int n_cell,
                                                  int n_node, R h, const R* rotation, const R* cell_weights,
                                                  const int* cell_nodes, const R* lambda, const R* mu, const R* mass,
                                                  const R* fixed, Damping damping, const int* node_cell_offset,
                                                  const int* node_cell_entry, R* corner) {
-  const int rank = g.rank, threads = g.threads;
-  auto value = [&](int source, int m) {
-    return source == kSourceX ? load3(g.x, m) : source == kSourceU ? load3(g.z, m) : g.next_u(g.r, g.w, g.s, m);
-  };
-  // The thread's first cell corner and node keep their incidence in registers for the
-  // whole solve (one load chain less per phase); further ones (small grids) load it.
-  const int corner_node = rank < 8 * n_cell ? cell_nodes[rank] : 0;
-  int node_entry[8], node_entries = 0;
-  if (rank < n_node) {
-    const int first = node_cell_offset[rank];
-    node_entries = node_cell_offset[rank + 1] - first;
-#pragma unroll
-    for (int k = 0; k < 8; ++k) node_entry[k] = k < node_entries ? node_cell_entry[first + k] : 0;
-  }
-  // Corners of R K R^T e per cell for the nodal values e = value(source, node).
-  auto cells = [&](int source) {
-    const int lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
-    for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop
-      const bool valid = t < lanes;
-      const int nd = !valid ? 0 : t == rank ? corner_node : cell_nodes[t];
-      const Vec3<R> y = CornerElement<R>(t, valid, rotation, cell_weights, lambda, mu).apply(h, value(source, nd));
-      if (valid) store3(corner, t, y);
-    }
-    grid_sync(g.bar);
-  };
-  // (A + C) e at node n for the node value e (newmark_apply_node; the same sum order as
-  // ops::gather_corner_sum).
-  auto node_apply = [&](int n, Vec3<R> e) {
-    Vec3<R> kp = zero3<R>();
-    if (n == rank && node_entries <= 8) {
-#pragma unroll
-      for (int k = 0; k < 8; ++k)
-        if (k < node_entries) kp += load3(corner, node_entry[k]);
-    } else {
-      kp = ops::gather_corner_sum(corner, node_cell_offset, node_cell_entry, n);
-    }
-    return fixed[n] != R(0) ? e : newmark_node_apply(c, mass, damping, n, e, kp);
-  };
-  cells(kSourceX);
-  double bb = grid_start_residual(g, n_node, g.r, g.s, [&](int n) { return node_apply(n, load3(g.x, n)); });
-  cells(kSourceU);
-  double start[3];
-  grid_start_sums(
-      g, n_node, g.r, g.w,
-      [&](int n, Vec3<R>& un) {
-        un = load3(g.z, n);
-        return node_apply(n, un);
-      },
-      bb, start);
-  grid_loop(g, n_node, start, bb, [&](double (&acc)[3]) {
-    cells(kSourceNextU);
-    for (int n = rank; n < n_node; n += threads) grid_own_update(g, n, g.r, g.w, g.s, g.r, g.w, g.s, node_apply, acc);
-  });
-}
-
-// The same solve for throughput, where threads loop over several cell corners (large
-// batches), with u = M^-1 r stored by the node update: the cell phase reads u at a corner's
-// node (one vector where newmark_pcg_grid evaluates it from three), and delta = w.u is summed
-// as in the one-phase form (a_k corner force . u over the corners, the node terms over the
-// nodes; a fixed node's u is 0), so the reduction comes right after the cell phase and the node
-// update needs no stored w. An iteration: the node update (w = A u gathered; s, p, x, r, u;
-// gamma, |r|^2 and delta's node part of the new u), a grid barrier, the corners of A u (and
-// delta's corner part), the reduction.
-template <class R, class Damping>
-__device__ __forceinline__ void newmark_pcg_grid_stored_u(GridPcg<R>& g, const ops::NewmarkCoefficients<R>& c,
-                                                          int n_cell, int n_node, R h, const R* rotation,
-                                                          const R* cell_weights, const int* cell_nodes,
-                                                          const R* lambda, const R* mu, const R* mass, const R* fixed,
-                                                          Damping damping, const int* node_cell_offset,
-                                                          const int* node_cell_entry, R* corner) {
   const int rank = g.rank, threads = g.threads, lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
   // The thread's first cell corner and node keep their incidence in registers.
   const int corner_node = rank < lanes ? cell_nodes[rank] : 0;

@@ -65,8 +65,9 @@ const char* const kGate = "if (gen::pcg_stopped(gate, $cg)) return;  // solve st
 // The bindings every grid solve shares: solver vectors, values, state and grid scratch.
 // The barrier counter is per kernel: its arrivals come in multiples of that kernel's
 // block count (grid_sync).
-Builder& grid_solve_params(Builder& b, const std::string& len, const std::string& kernel) {
-  b.vec("x", true, len, true).vec("b", false, len).vec("inv_diag", false, len, true);
+// With setup, the kernel writes b and inv_diag itself.
+Builder& grid_solve_params(Builder& b, const std::string& len, const std::string& kernel, bool setup = false) {
+  b.vec("x", true, len, true).vec("b", setup, len).vec("inv_diag", setup, len, true);
   b.vec("r", true, len, true).vec("w", true, len, true).vec("s", true, len, true);
   b.vec("z", true, len, true).vec("p", true, len).vec("iterations", true, "1");
   b.value("tol", "double").value("max_it", "int").value("log_slot", "int").value("reference_mode", "int");
@@ -94,57 +95,30 @@ std::string bind_damping(const Graph& g, int op, Builder& b) {
   return "$damping";
 }
 
-// The time-step system (a_m M + a_k K) on the free nodes, identity on fixed ones, in one
-// kernel: element apply over cell corners, grid barriers, node gather and update.
-Snippet newmark_grid_loop(const Graph& g, int op) {
-  Builder b(g, op, "newmark_pcg_grid", Extent::Grid);
+// The time-step system (a_m M + a_k K) on the free nodes, identity on fixed ones: the whole
+// PCG solve in one cooperative kernel in the form `form` (codegen/solver_kernels.cuh), its
+// setup first (gen::newmark_grid_setup: the Jacobi diagonal and the masked right-hand side
+// from rhs, as newmark_diag and newmark_setup of the host-driven sequence). The one-phase
+// form alternates r, s and the corner forces with r2, s2 and corner2.
+Snippet newmark_grid(const Graph& g, int op, const std::string& form, const std::string& barrier, bool one_phase,
+                     const std::string& stage) {
+  Builder b(g, op, form, Extent::Grid);
   const std::string damping = bind_damping(g, op, b);
   b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
   newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
   b.scratch("corner", "corner", "Real", Domain::Cell, 24, true, true);
-  grid_solve_params(b, "3 * n_node", "newmark");
-  b.stage("whole PCG solve in one cooperative kernel: element apply, node gather and update (grid barriers)", true);
-  return b.code(std::string(kCoefficients) + grid_state() +
-                "gen::newmark_pcg_grid<Real>(pcg, c, n_cell, n_node, h, $rotation, g_cell_weights, g_cell_nodes, "
-                "$lambda, $mu,\n"
-                "                            $mass, $fixed, " + damping +
-                ", g_node_cell_offset, g_node_cell_entry, $corner);\n");
-}
-
-// The same system with one phase per iteration (for latency): r, s and the corner forces
-// alternate with r2, s2 and corner2.
-Snippet newmark_grid_one_phase(const Graph& g, int op) {
-  Builder b(g, op, "newmark_pcg_grid_one_phase", Extent::Grid);
-  const std::string damping = bind_damping(g, op, b);
-  b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
-  newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
-  b.scratch("corner", "corner", "Real", Domain::Cell, 24, true, true);
-  b.scratch("corner2", "corner2", "Real", Domain::Cell, 24, true, true);
-  b.vec("r2", true, "3 * n_node", true).vec("s2", true, "3 * n_node", true);
-  grid_solve_params(b, "3 * n_node", "newmark_one_phase");
-  b.stage("whole PCG solve in one cooperative kernel, one phase per iteration (node gathers at the corners)", true);
-  return b.code(std::string(kCoefficients) + grid_state() +
-                "gen::newmark_pcg_grid_one_phase<Real>(pcg, c, n_cell, n_node, h, $rotation, g_cell_weights, "
-                "g_cell_nodes,\n"
-                "                                      $lambda, $mu, $mass, $fixed, " + damping +
-                ", g_node_cell_offset, g_node_cell_entry,\n"
-                "                                      $corner, $corner2, v_r2, v_s2);\n");
-}
-
-// The same system for throughput, u stored by the node update and read by the cell phase.
-Snippet newmark_grid_stored_u(const Graph& g, int op) {
-  Builder b(g, op, "newmark_pcg_grid_stored_u", Extent::Grid);
-  const std::string damping = bind_damping(g, op, b);
-  b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
-  newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
-  b.scratch("corner", "corner", "Real", Domain::Cell, 24, true, true);
-  grid_solve_params(b, "3 * n_node", "newmark_stored_u");
-  b.stage("whole PCG solve in one cooperative kernel: node update storing u, element apply of u (grid barriers)", true);
-  return b.code(std::string(kCoefficients) + grid_state() +
-                "gen::newmark_pcg_grid_stored_u<Real>(pcg, c, n_cell, n_node, h, $rotation, g_cell_weights, "
-                "g_cell_nodes,\n"
-                "                                     $lambda, $mu, $mass, $fixed, " + damping +
-                ", g_node_cell_offset, g_node_cell_entry, $corner);\n");
+  if (one_phase) {
+    b.scratch("corner2", "corner2", "Real", Domain::Cell, 24, true, true);
+    b.vec("r2", true, "3 * n_node", true).vec("s2", true, "3 * n_node", true);
+  }
+  b.vec("rhs", false, "3 * n_node").value("zero_x", "int");
+  grid_solve_params(b, "3 * n_node", barrier, true);
+  b.stage(stage, true);
+  const std::string args = "c, n_cell, n_node, h, $rotation, g_cell_weights, g_cell_nodes, $lambda, $mu, $mass, $fixed, " +
+                           damping + ", g_node_cell_offset, g_node_cell_entry";
+  return b.code(std::string(kCoefficients) + grid_state() + "gen::newmark_grid_setup<Real>(pcg, " + args +
+                ", v_rhs, zero_x, v_b, v_inv_diag, $corner);\n" + "gen::" + form + "<Real>(pcg, " + args +
+                (one_phase ? ", $corner, $corner2, v_r2, v_s2);\n" : ", $corner);\n"));
 }
 
 // The band Laplacian, one phase per iteration: r, w, s alternate with r2, w2, s2.
@@ -221,9 +195,12 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
                                  "                              v_p, v_q);\n"));
   }
   for (Snippet& p : pcg_snippets(g, op)) s.push_back(p);
-  s.push_back(newmark_grid_loop(g, op));
-  s.push_back(newmark_grid_one_phase(g, op));
-  s.push_back(newmark_grid_stored_u(g, op));
+  s.push_back(newmark_grid(g, op, "newmark_pcg_grid", "newmark", false,
+                           "whole PCG solve in one cooperative kernel: its setup, then per iteration node update "
+                           "storing u, element apply of u (grid barriers)"));
+  s.push_back(newmark_grid(g, op, "newmark_pcg_grid_one_phase", "newmark_one_phase", true,
+                           "whole PCG solve in one cooperative kernel: its setup, then one phase per iteration "
+                           "(node gathers at the corners)"));
   return s;
 }
 

@@ -316,9 +316,12 @@ void GpuTimestep::Impl::decide_grid_solves() {
   extension_grid = phases == 2 ? "extension_pcg_grid_two_phase" : "extension_pcg_grid";
 }
 
-// The time-step system's grid kernel: one phase per iteration where every cell corner has a
-// thread (its extra loads, the node gathers, hide behind the barrier it saves), two where
-// threads loop over corners. One phase needs every node in some cell (its owner is a corner).
+// The time-step system's grid kernel: one phase per iteration for a single simulation whose
+// every cell corner has a thread, else two. Measured on an H200 (docs/benchmarks.md, session
+// 31; ms a step): the peer's dragon at batch 1 0.58 against 0.78-0.86 (one phase without the
+// registers of CornerLane: 0.65); the torus 0.18 against 0.20; the CalculiX cube at batch 16
+// 0.595 against 0.556, at batch 64 1.44 against 1.10; the dragon at batch 32 4.0 against 2.0.
+// One phase needs every node in some cell (its owner is a corner).
 void GpuTimestep::Impl::decide_newmark_grid() {
   newmark_grid = "newmark_pcg_grid";
   const PlannedKernel* one_phase = plan.find(false, "newmark_pcg_grid_one_phase");
@@ -326,11 +329,11 @@ void GpuTimestep::Impl::decide_newmark_grid() {
   int phases = options.newmark_phases;
   if (const char* e = std::getenv("SSC_GPU_NEWMARK_PHASES")) phases = std::atoi(e);
   const long corners = 8L * sizes.cell;
-  if (phases < 1 || phases > 3) phases = long(grid_blocks(*one_phase, corners)) * kGridBlock >= corners ? 1 : 2;
+  if (phases != 1 && phases != 2)
+    phases = batch == 1 && long(grid_blocks(*one_phase, corners)) * kGridBlock >= corners ? 1 : 2;
   for (size_t n = 0; n + 1 < grid.node_cell_offset.size(); ++n)
     if (phases == 1 && grid.node_cell_offset[n + 1] == grid.node_cell_offset[n]) phases = 2;
   if (phases == 1) newmark_grid = "newmark_pcg_grid_one_phase";
-  if (phases == 3) newmark_grid = "newmark_pcg_grid_stored_u";
 }
 
 // The persistent solves' register cap. Uncapped (over 128 registers), they hold one block per
@@ -639,7 +642,7 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
 // `iterations` receives the iteration count per batch item on the device.
 void GpuTimestep::Impl::grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it,
                                  cu::DevicePtr iterations, const char* what, std::vector<int>* iterations_out,
-                                 int reference_mode) {
+                                 int reference_mode, cu::DevicePtr rhs, bool zero_x) {
   const int slot = int(solve_checks.size());
   if (slot >= kMaxSolveLog) throw std::logic_error("gpu: more grid solves in one step than s_cg_log holds");
   Call c;
@@ -647,10 +650,12 @@ void GpuTimestep::Impl::grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long w
   c.values = {{"tol", tol},
               {"max_it", double(max_it)},
               {"log_slot", double(slot)},
-              {"reference_mode", double(reference_mode)}};
+              {"reference_mode", double(reference_mode)},
+              {"zero_x", zero_x ? 1.0 : 0.0}};  // a Newmark grid solve's setup (the extension's has none)
   for (const char* v : {"v_b", "v_inv_diag", "v_r", "v_w", "v_s", "v_z", "v_p", "v_r2", "v_w2", "v_s2"})
     c.vectors[v] = scratch.at(v).ptr;
   c.vectors["v_x"] = x;
+  c.vectors["v_rhs"] = rhs;
   c.vectors["v_iterations"] = iterations;
   launch(k, c);
   solve_checks.push_back({slot, what, tol, iterations_out, reference_mode != 0});

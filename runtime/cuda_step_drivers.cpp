@@ -1,8 +1,9 @@
 // What one GPU timestep launches (see cuda_runtime.h): the planned kernels in order,
 // forward or adjoint, with each opaque op's solver stage sequence in their place.
 //
-// Forward: newmark_init, diag, setup, then PCG with the element apply (cell kernel,
-// node gather) on u; the extension: setup (rhs from the active neighbours, the guess),
+// Forward: newmark_init, then the grid solve, which runs its setup itself (the Jacobi
+// diagonal, the masked right-hand side), or diag, setup and the host-driven PCG with the
+// element apply (cell kernel, node gather) on u; the extension: setup (rhs from the active neighbours, the guess),
 // PCG with the band Laplacian on band_u. Each PCG is one persistent grid kernel
 // (newmark_pcg_grid or its one-phase form for batch 1; extension_pcg_grid, or its two-phase
 // form for large batches) when
@@ -69,13 +70,13 @@ void GpuTimestep::Impl::newmark(int o) {
   const OpNode& op = graph.ops()[o];
   const cu::DevicePtr u = tensors.at(op.output("u")).ptr, rhs = tensors.at(op.input("rhs")).ptr;
   launch(kernel("newmark_init", false, o));
-  newmark_setup(o, rhs, u, false);
-  if (grid_solves) {
+  if (grid_solves) {  // the grid kernel runs its setup itself
     grid_pcg(kernel(newmark_grid, false, o), u, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
              solver.cg_max_iterations, tensors.at(op.output("cg_iterations")).ptr, "time-step solve", &cg_iterations,
-             0);
+             0, rhs, false);
     return;
   }
+  newmark_setup(o, rhs, u, false);
   cg_iterations = pcg(u, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(o),
                       "time-step solve", fmt::format("newmark {}", o), 0);
   write_iterations(op.output("cg_iterations"), cg_iterations);
@@ -149,13 +150,15 @@ void GpuTimestep::Impl::adjoint_newmark(int o) {
   // newmark_adjoint; clear_warm_starts zeroes it for a new backward pass).
   const int reference_mode = adjoint_reference_set ? 2 : 1;
   adjoint_reference_set = true;
-  newmark_setup(o, adjoints.at(op.output("u")).ptr, w, !(reference_mode == 1 && warm_adjoint_solves));
-  if (grid_solves) {
+  const cu::DevicePtr rhs = adjoints.at(op.output("u")).ptr;
+  const bool zero_x = !(reference_mode == 1 && warm_adjoint_solves);
+  if (grid_solves) {  // the grid kernel runs its setup itself
     grid_pcg(kernel(newmark_grid, false, o), w, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
              solver.cg_max_iterations, scratch.at("v_iterations_sink").ptr, "adjoint time-step solve",
-             &adjoint_cg_iterations, reference_mode);
+             &adjoint_cg_iterations, reference_mode, rhs, zero_x);
     return;
   }
+  newmark_setup(o, rhs, w, zero_x);
   const std::vector<int> its = pcg(w, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(o),
                                    "adjoint time-step solve", fmt::format("adjoint newmark {}", o), reference_mode);
   for (int k = 0; k < batch; ++k) adjoint_cg_iterations[k] += its[k];

@@ -164,9 +164,11 @@ struct GpuTimestep::Impl {
   long wanted_blocks(long work) const;
   void decide_grid_min_blocks();
   // iterations_out: assigned the solve's iterations per item, or added to with reference_mode != 0
-  // (the step's adjoint time-step solves, summed).
+  // (the step's adjoint time-step solves, summed). rhs and zero_x: a Newmark grid solve's setup
+  // (its right-hand side; x = 0 everywhere first).
   void grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it, cu::DevicePtr iterations,
-                const char* what, std::vector<int>* iterations_out, int reference_mode);
+                const char* what, std::vector<int>* iterations_out, int reference_mode, cu::DevicePtr rhs = 0,
+                bool zero_x = false);
   void read_solve_checks();
   void write_iterations(int tensor, const std::vector<int>& iterations);
 

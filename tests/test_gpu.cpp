@@ -413,9 +413,9 @@ TEST(GpuExtension, OneAndTwoPhaseGridSolvesGiveTheSameBits) {
 }
 
 // The time-step system's two grid solves (one phase per iteration, the node gathers at the
-// cell corners, for latency; two, the element apply and the node gather, for throughput)
-// are the same PCG iterates in another order of sums: each against the interpreter, forward
-// and adjoint, in double and float.
+// cell corners, for latency; two, the node update storing u and the element apply of u, for
+// throughput), each with its setup inside, are the same PCG iterates in another order of
+// sums: each against the interpreter, forward and adjoint, in double and float.
 TEST(GpuForward, OneAndTwoPhaseTimeStepSolvesMatchTheInterpreter) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
