@@ -376,13 +376,21 @@ struct GridPcg {
 };
 
 // gamma += r.u, delta += w.u, |r|^2 += r.r at one node.
-template <class R>
-__device__ __forceinline__ void add_pcg_sums(double (&acc)[3], Vec3<R> rn, Vec3<R> un, Vec3<R> wn) {
+template <class R, int N>
+__device__ __forceinline__ void add_pcg_sums(double (&acc)[N], Vec3<R> rn, Vec3<R> un, Vec3<R> wn) {
+  static_assert(N >= 3, "gamma, delta and |r|^2");
   for (int k = 0; k < 3; ++k) {
     acc[0] += double(rn[k]) * double(un[k]);
     acc[1] += double(wn[k]) * double(un[k]);
     acc[2] += double(rn[k]) * double(rn[k]);
   }
+}
+
+// delta's corner part a_k (corner force y . u) at one cell corner (the Newmark grid solves sum
+// delta = w.u over the corners and the node terms over the nodes).
+template <class R>
+__device__ __forceinline__ void add_corner_delta(double& delta, R a_k, Vec3<R> y, Vec3<R> u) {
+  delta += double(a_k) * (double(y.x) * double(u.x) + double(y.y) * double(u.y) + double(y.z) * double(u.z));
 }
 
 // The start's first half over the thread's own nodes (count of them in all), given
@@ -590,17 +598,12 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
       const Vec3<R> y = CornerElement<R>(t, valid, rotation, cell_weights, lambda, mu).apply(h, e);
       if (!valid) continue;
       store3(corner, t, y);
-      delta += double(c.a_k) * (double(y.x) * double(e.x) + double(y.y) * double(e.y) + double(y.z) * double(e.z));
+      add_corner_delta(delta, c.a_k, y, e);
     }
   };
   // Node n's sums of the new r and u: gamma, delta's node part, |r|^2.
   auto node_sums = [&](int n, Vec3<R> rn, Vec3<R> un, double (&acc)[3]) {
-    const Vec3<R> node_part = system(n, un, zero3<R>());
-    for (int k = 0; k < 3; ++k) {
-      acc[0] += double(rn[k]) * double(un[k]);
-      acc[1] += double(node_part[k]) * double(un[k]);
-      acc[2] += double(rn[k]) * double(rn[k]);
-    }
+    add_pcg_sums(acc, rn, un, system(n, un, zero3<R>()));
   };
   double unused = 0;
   cells(g.x, unused);
@@ -730,19 +733,13 @@ __device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const 
     const Vec3<R> y = L.element.apply(h, un);
     if (!L.valid) return;
     store3(out, t, y);
-    if (!L.fixed)
-      acc[1] += double(c.a_k) * (double(y.x) * double(un.x) + double(y.y) * double(un.y) + double(y.z) * double(un.z));
+    if (!L.fixed) add_corner_delta(acc[1], c.a_k, y, un);
     if (!L.owner) return;
     store3(r_out, m, rn);
     store3(s_out, m, sn);
     store3(g.p, m, pn);
     if (!start) store3(g.x, m, load3(g.x, m) + g.step * pn);
-    const Vec3<R> node_part = system(L, un, zero3<R>());
-    for (int k = 0; k < 3; ++k) {
-      acc[0] += double(rn[k]) * double(un[k]);
-      acc[1] += double(node_part[k]) * double(un[k]);
-      acc[2] += double(rn[k]) * double(rn[k]);
-    }
+    add_pcg_sums(acc, rn, un, system(L, un, zero3<R>()));
     if (start) {
       const Vec3<R> bm = load3(g.b, m);
       for (int k = 0; k < 3; ++k) acc[3] += double(bm[k]) * double(bm[k]);

@@ -331,8 +331,8 @@ void GpuTimestep::Impl::decide_newmark_grid() {
   const long corners = 8L * sizes.cell;
   if (phases != 1 && phases != 2)
     phases = batch == 1 && long(grid_blocks(*one_phase, corners)) * kGridBlock >= corners ? 1 : 2;
-  for (size_t n = 0; n + 1 < grid.node_cell_offset.size(); ++n)
-    if (phases == 1 && grid.node_cell_offset[n + 1] == grid.node_cell_offset[n]) phases = 2;
+  for (size_t n = 0; phases == 1 && n + 1 < grid.node_cell_offset.size(); ++n)
+    if (grid.node_cell_offset[n + 1] == grid.node_cell_offset[n]) phases = 2;
   if (phases == 1) newmark_grid = "newmark_pcg_grid_one_phase";
 }
 

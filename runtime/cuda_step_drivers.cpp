@@ -1,14 +1,13 @@
 // What one GPU timestep launches (see cuda_runtime.h): the planned kernels in order,
 // forward or adjoint, with each opaque op's solver stage sequence in their place.
 //
-// Forward: newmark_init, then the grid solve, which runs its setup itself (the Jacobi
-// diagonal, the masked right-hand side), or diag, setup and the host-driven PCG with the
-// element apply (cell kernel, node gather) on u; the extension: setup (rhs from the active neighbours, the guess),
-// PCG with the band Laplacian on band_u. Each PCG is one persistent grid kernel
-// (newmark_pcg_grid or its one-phase form for batch 1; extension_pcg_grid, or its two-phase
-// form for large batches) when
-// grid solves are on, whose outcomes the host reads after the step; else the host-driven
-// iteration kernels.
+// Forward: newmark_init, then the time-step solve; the extension: setup (rhs from the active
+// neighbours, the guess), PCG with the band Laplacian on band_u. With grid solves each PCG is
+// one persistent grid kernel, whose outcomes the host reads after the step: newmark_pcg_grid
+// or its one-phase form for batch 1 (either computes its Jacobi diagonal and masked
+// right-hand side itself); extension_pcg_grid, or its two-phase form for large batches.
+// Without: newmark_diag, newmark_setup and the host-driven iteration kernels (element apply:
+// cell kernel, node gather).
 // Where the extension is one dense product (runtime/band_operator.h), it is a single
 // kernel each way instead.
 // Adjoint (implicit-function adjoints, as runtime/interpreter_adjoint.cpp): the
