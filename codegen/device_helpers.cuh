@@ -64,6 +64,14 @@ __device__ inline Vec3<R> shfl_xor3(Vec3<R> v, int mask) {
                    __shfl_xor_sync(0xffffffffu, v.z, mask));
 }
 
+// The double buffers of a solve that reads one while it writes the other.
+template <class T>
+__device__ __forceinline__ void swap_pointers(T*& a, T*& b) {
+  T* const t = a;
+  a = b;
+  b = t;
+}
+
 // Extent::Grid: the threads of one batch item are gridDim.x blocks of SSC_GRID threads.
 __device__ inline int grid_rank() { return blockIdx.x * SSC_GRID + threadIdx.x; }
 __device__ inline int grid_threads() { return gridDim.x * SSC_GRID; }
@@ -98,32 +106,78 @@ __device__ inline void grid_sync(unsigned long long* bar) {
   __syncthreads();
 }
 
-// Sums N doubles over all threads of one batch item in a fixed order (block trees, then
-// the block totals in block order by warp 0 of every block): every thread of every block
-// returns with the same bits. partial holds N * gridDim.x doubles; consecutive calls must
-// use different partial buffers unless a grid_sync separates them. Includes a grid_sync.
-// An item of one block returns with its block tree's totals: the same bits (the block
-// total plus zeros).
+// Sums N doubles over all threads of one batch item in a fixed order (warp trees, the warp
+// totals in warp order by warp 0, then the block totals in block order by warp 0 of every
+// block): every thread of every block returns with the same bits, the sums of block_sum
+// followed by a tree over the blocks. partial holds N * gridDim.x doubles; consecutive calls
+// must use different partial buffers unless a grid_sync separates them. Includes a grid_sync
+// (writes of any thread before it are visible to every thread after it).
+// Two block barriers, not block_sum's three and grid_sync's two more: warp 0 alone publishes
+// the block's total, arrives and polls (its lane 0 acquires, __syncwarp passes that on to the
+// warp), and loads every block's N totals at once before the trees. The shared arrays need no
+// barrier at the end: part is read before this call's second barrier and written again after
+// it; total is written again after the next call's first barrier, which every thread reaches
+// after reading this call's. An item of one block returns with its block tree's totals (the
+// block total plus zeros).
 template <int N>
 __device__ inline void grid_sum(double (&v)[N], double* partial, unsigned long long* bar) {
-  block_sum<N, SSC_GRID>(v);
-  if (gridDim.x == 1) return;
-  if (threadIdx.x == 0)
-    for (int k = 0; k < N; ++k) partial[N * blockIdx.x + k] = v[k];
-  grid_sync(bar);
+  constexpr int kWarps = SSC_GRID / 32;
+  __shared__ double part[N][kWarps];
   __shared__ double total[N];
-  if (threadIdx.x < 32) {
-    const int lane = threadIdx.x;
+  const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
+#pragma unroll
+  for (int k = 0; k < N; ++k)
+    for (int o = 16; o > 0; o >>= 1) v[k] += __shfl_down_sync(0xffffffffu, v[k], o);
+  if (lane == 0)
+#pragma unroll
+    for (int k = 0; k < N; ++k) part[k][warp] = v[k];
+  __syncthreads();
+  if (warp == 0) {
+    double s[N];
+#pragma unroll
     for (int k = 0; k < N; ++k) {
-      double s = 0;
-      for (int j = lane; j < int(gridDim.x); j += 32) s += __ldcg(partial + N * j + k);
-      for (int o = 16; o > 0; o >>= 1) s += __shfl_down_sync(0xffffffffu, s, o);
-      if (lane == 0) total[k] = s;
+      s[k] = lane < kWarps ? part[k][lane] : 0.0;
+      for (int o = 16; o > 0; o >>= 1) s[k] += __shfl_down_sync(0xffffffffu, s[k], o);
     }
+    if (gridDim.x > 1) {
+      if (lane == 0) {
+#pragma unroll
+        for (int k = 0; k < N; ++k) partial[N * blockIdx.x + k] = s[k];
+        const unsigned long long blocks = gridDim.x;
+        const unsigned long long target = (add_release(bar, 1ull) / blocks + 1) * blocks;
+        while (load_acquire(bar) < target) {
+        }
+      }
+      __syncwarp();
+      constexpr int kMaxLoads = 8;  // blocks up to 256 loaded at once; more in further rounds
+#pragma unroll
+      for (int k = 0; k < N; ++k) s[k] = 0;
+      for (int j0 = lane; j0 < int(gridDim.x); j0 += 32 * kMaxLoads) {
+        double q[kMaxLoads][N];
+#pragma unroll
+        for (int i = 0; i < kMaxLoads; ++i)
+#pragma unroll
+          for (int k = 0; k < N; ++k) {
+            const int j = j0 + 32 * i;
+            q[i][k] = j < int(gridDim.x) ? __ldcg(partial + N * j + k) : 0.0;
+          }
+#pragma unroll
+        for (int i = 0; i < kMaxLoads; ++i)
+#pragma unroll
+          for (int k = 0; k < N; ++k)
+            if (j0 + 32 * i < int(gridDim.x)) s[k] += q[i][k];
+      }
+#pragma unroll
+      for (int k = 0; k < N; ++k)
+        for (int o = 16; o > 0; o >>= 1) s[k] += __shfl_down_sync(0xffffffffu, s[k], o);
+    }
+    if (lane == 0)
+#pragma unroll
+      for (int k = 0; k < N; ++k) total[k] = s[k];
   }
   __syncthreads();
+#pragma unroll
   for (int k = 0; k < N; ++k) v[k] = total[k];
-  __syncthreads();
 }
 }  // namespace gen
 }  // namespace ssc

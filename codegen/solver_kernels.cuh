@@ -769,15 +769,9 @@ __device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const 
     double a4[4] = {0, 0, 0, 0};
     phase(false, c_in, c_out, r_in, s_in, r_out, s_out, a4);
     for (int k = 0; k < 3; ++k) acc[k] = a4[k];
-    R* t = c_in;
-    c_in = c_out;
-    c_out = t;
-    t = r_in;
-    r_in = r_out;
-    r_out = t;
-    t = s_in;
-    s_in = s_out;
-    s_out = t;
+    swap_pointers(c_in, c_out);
+    swap_pointers(r_in, r_out);
+    swap_pointers(s_in, s_out);
   });
 }
 
@@ -848,15 +842,9 @@ __device__ __forceinline__ void extension_pcg_grid(GridPcg<R>& g, int n_band, co
       grid_own_update(
           g, n, r_now, w_now, s_now, r_next, w_next, s_next, [&](int, Vec3<R>) { return wn; }, acc);
     }
-    R* t = r_now;
-    r_now = r_next;
-    r_next = t;
-    t = w_now;
-    w_now = w_next;
-    w_next = t;
-    t = s_now;
-    s_now = s_next;
-    s_next = t;
+    swap_pointers(r_now, r_next);
+    swap_pointers(w_now, w_next);
+    swap_pointers(s_now, s_next);
   });
 }
 

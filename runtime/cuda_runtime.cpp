@@ -316,12 +316,16 @@ void GpuTimestep::Impl::decide_grid_solves() {
   extension_grid = phases == 2 ? "extension_pcg_grid_two_phase" : "extension_pcg_grid";
 }
 
-// The time-step system's grid kernel: one phase per iteration for a single simulation whose
-// every cell corner has a thread, else two. Measured on an H200 (docs/benchmarks.md, session
-// 31; ms a step): the peer's dragon at batch 1 0.58 against 0.78-0.86 (one phase without the
-// registers of CornerLane: 0.65); the torus 0.18 against 0.20; the CalculiX cube at batch 16
-// 0.595 against 0.556, at batch 64 1.44 against 1.10; the dragon at batch 32 4.0 against 2.0.
-// One phase needs every node in some cell (its owner is a corner).
+// The time-step system's grid kernel: one phase per iteration where every cell corner of an
+// item has a thread, else two. Measured on an H200 (docs/benchmarks.md, session 31; ms a
+// step): the peer's dragon at batch 1 0.58 against 0.78-0.86 (one phase without the registers
+// of CornerLane: 0.65); the torus 0.18 against 0.20; the CalculiX cube at batch 16 0.595
+// against 0.556; where threads loop over corners (the cube at batch 64 1.44 against 1.10, the
+// dragon at batch 32 4.0 against 2.0) two phases. The choice must not depend on the batch
+// beyond the blocks an item gets: the two forms sum in different orders, and an item's bits
+// must not change with what runs beside it (docs/cli.md; BatchEvaluation.APointsValuesDoNotDependOnTheBatchBesideIt
+// failed on an H100 when batch 1 alone took one phase). One phase needs every node in some
+// cell (its owner is a corner).
 void GpuTimestep::Impl::decide_newmark_grid() {
   newmark_grid = "newmark_pcg_grid";
   const PlannedKernel* one_phase = plan.find(false, "newmark_pcg_grid_one_phase");
@@ -330,7 +334,7 @@ void GpuTimestep::Impl::decide_newmark_grid() {
   if (const char* e = std::getenv("SSC_GPU_NEWMARK_PHASES")) phases = std::atoi(e);
   const long corners = 8L * sizes.cell;
   if (phases != 1 && phases != 2)
-    phases = batch == 1 && long(grid_blocks(*one_phase, corners)) * kGridBlock >= corners ? 1 : 2;
+    phases = long(grid_blocks(*one_phase, corners)) * kGridBlock >= corners ? 1 : 2;
   for (size_t n = 0; phases == 1 && n + 1 < grid.node_cell_offset.size(); ++n)
     if (grid.node_cell_offset[n + 1] == grid.node_cell_offset[n]) phases = 2;
   if (phases == 1) newmark_grid = "newmark_pcg_grid_one_phase";

@@ -69,9 +69,10 @@ struct GpuOptions {
   int extension_phases = 0;
   // The time-step system's grid solve: 1 phase per iteration (every cell corner gathers its
   // node's forces itself; one barrier an iteration, for latency), 2 phases (the node update
-  // storing u, a barrier, the element apply of u: fewer loads, for throughput), or 0: 1 for a
-  // batch of one whose every cell corner has a thread of its own, else 2
-  // (SSC_GPU_NEWMARK_PHASES=1 or 2 overrides).
+  // storing u, a barrier, the element apply of u: fewer loads, for throughput), or 0: 1 where
+  // every cell corner of an item has a thread of its own, else 2; never the batch alone, so
+  // that an item's bits do not change with what runs beside it (SSC_GPU_NEWMARK_PHASES=1 or 2
+  // overrides).
   int newmark_phases = 0;
   // The extension as one dense product G u and its adjoint as G^T band_u_bar where G
   // (runtime/band_operator.h) fits kDenseExtensionBytes; else, or off, or with

@@ -9,7 +9,9 @@
 // the JAX peer's dragon (tools/bench/peer-compare.sh), whose GPU steps are timed as an
 // observed step (with the band extension, as GpuForwardStep times every body) and as an
 // unobserved one (GpuUnobserved...: without it, what the peer computes; a fit runs the
-// extension at observed steps only). Figures go into docs/benchmarks.md.
+// extension at observed steps only), and the peer's own gradient measure (a 40-step
+// trajectory's J = sum |u_T|^2 with its gradient, per step; GpuTrajectoryGradient,
+// CpuTrajectoryGradient). Figures go into docs/benchmarks.md.
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -228,6 +230,59 @@ void BM_GpuUnobservedRollout(benchmark::State& state, const std::string& name, c
   state.counters["batch"] = batch;
 }
 
+// The peer's gradient measure: J = sum |u_T|^2 after T = 40 steps from rest and its gradient
+// (forward pass with every step kept, backward pass), as a fit runs them on the GPU; the time
+// per step. The step T is observed (the extension runs there, once); the adjoint time-step
+// solves warm-start from the later step's solution, the peer's transposed solves from zero.
+// On the CPU interpreter where gpu_real is empty.
+void trajectory_gradient(benchmark::State& state, const std::string& name, const std::string& gpu_real) {
+  Body& b = body(name);
+  const int batch = int(state.range(0));
+  constexpr int kSteps = 40;
+  Simulation sim(b.scene, b.grid, batch, true);
+  if (!gpu_real.empty()) sim.use_gpu(gpu_real);
+  auto last_adjoint_iterations = [&] {
+    return sim.on_gpu() ? sim.gpu()->adjoint_cg_iterations()[0] : sim.last_report().adjoint_cg_iterations[0];
+  };
+  const size_t n3 = 3 * size_t(b.grid.node_count);
+  const FrameCostFunction final_displacement = [n3](size_t, int, const double* u, const double*, double* u_bar,
+                                                    double*) {
+    FrameCost fc;
+    for (size_t i = 0; i < n3; ++i) {
+      fc.cost += u[i] * u[i];
+      if (u_bar) u_bar[i] += 2 * u[i];
+    }
+    return fc;
+  };
+  // on_step is called before each backward step: the adjoint iterations of the one before.
+  long adjoint_iterations = 0;
+  GradientOptions options;
+  options.on_step = [&](int done, int total) {
+    if (done > total / 2 + 1) adjoint_iterations += last_adjoint_iterations();
+  };
+  auto gradient = [&] {
+    adjoint_iterations = 0;
+    std::vector<CostGradient> g = evaluate_trajectory_gradient(sim, {kSteps}, final_displacement, options);
+    adjoint_iterations += last_adjoint_iterations();
+    return g;
+  };
+  std::vector<CostGradient> g = gradient();  // kernels compiled, graphs captured
+  for (auto _ : state) {
+    const auto t0 = std::chrono::steady_clock::now();
+    g = gradient();
+    state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / kSteps);
+  }
+  report_size(state, b);
+  state.counters["adjoint_cg_iter"] = double(adjoint_iterations) / kSteps;
+  state.counters["dJdE"] = g[0].gradient.youngs_modulus;
+  state.counters["batch"] = batch;
+}
+
+void BM_GpuTrajectoryGradient(benchmark::State& state, const std::string& name, const std::string& real) {
+  if (gpu_or_skip(state)) trajectory_gradient(state, name, real);
+}
+void BM_CpuTrajectoryGradient(benchmark::State& state, const std::string& name) { trajectory_gradient(state, name, ""); }
+
 void BM_GpuGradientStep(benchmark::State& state, const std::string& name, const std::string& real) {
   if (gpu_or_skip(state)) gradient_steps(state, body(name), int(state.range(0)), real);
 }
@@ -257,6 +312,8 @@ void register_all() {
         ->Arg(1)->Unit(benchmark::kMillisecond);
     benchmark::RegisterBenchmark(("CpuGradientStep/" + name).c_str(), BM_CpuGradientStep, name)
         ->Unit(benchmark::kMillisecond);
+    benchmark::RegisterBenchmark(("CpuTrajectoryGradient/" + name).c_str(), BM_CpuTrajectoryGradient, name)
+        ->Arg(1)->Unit(benchmark::kMillisecond)->UseManualTime();
     for (const std::string real : {"double", "float"}) {
       benchmark::RegisterBenchmark(("GpuForwardStep/" + name + "/" + real).c_str(), BM_GpuForwardStep, name, real, true)
           ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
@@ -270,6 +327,9 @@ void register_all() {
           ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseRealTime();
       benchmark::RegisterBenchmark(("GpuUnobservedRollout/" + name + "/" + real).c_str(), BM_GpuUnobservedRollout, name,
                                    real)
+          ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseManualTime();
+      benchmark::RegisterBenchmark(("GpuTrajectoryGradient/" + name + "/" + real).c_str(), BM_GpuTrajectoryGradient,
+                                   name, real)
           ->Arg(1)->Arg(32)->Unit(benchmark::kMillisecond)->UseManualTime();
     }
   }
