@@ -8,29 +8,41 @@
 #include "ops/ssc_math.h"
 namespace ssc {
 namespace gen {
-// Sums N doubles over the Threads threads of a block in a fixed order: each warp by a
-// shuffle tree, then the warp sums (in warp order) by a shuffle tree in warp 0. Every
-// thread returns with the totals. All threads of the block must call it (it has barriers).
-template <int N, int Threads = SSC_ITEM>
-__device__ inline void block_sum(double (&v)[N]) {
+// The block's N totals in warp 0 (lane 0 holds them; the other lanes of warp 0 hold partial
+// trees): each warp's values by a shuffle tree, the warp totals through part, then those (in
+// warp order) by a shuffle tree in warp 0. All threads of the block must call it (one
+// barrier); part is the caller's shared array, read by warp 0 after the barrier.
+template <int N, int Threads>
+__device__ inline void warp0_block_totals(double (&v)[N], double (&part)[N][Threads / 32], double (&s)[N]) {
   constexpr int kWarps = Threads / 32;
-  __shared__ double part[N][kWarps];
-  __shared__ double total[N];
   const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
 #pragma unroll
   for (int k = 0; k < N; ++k)
     for (int o = 16; o > 0; o >>= 1) v[k] += __shfl_down_sync(0xffffffffu, v[k], o);
   if (lane == 0)
+#pragma unroll
     for (int k = 0; k < N; ++k) part[k][warp] = v[k];
   __syncthreads();
   if (warp == 0) {
 #pragma unroll
     for (int k = 0; k < N; ++k) {
-      double s = lane < kWarps ? part[k][lane] : 0.0;
-      for (int o = 16; o > 0; o >>= 1) s += __shfl_down_sync(0xffffffffu, s, o);
-      if (lane == 0) total[k] = s;
+      s[k] = lane < kWarps ? part[k][lane] : 0.0;
+      for (int o = 16; o > 0; o >>= 1) s[k] += __shfl_down_sync(0xffffffffu, s[k], o);
     }
   }
+}
+
+// Sums N doubles over the Threads threads of a block in a fixed order (warp0_block_totals).
+// Every thread returns with the totals. All threads of the block must call it (it has barriers).
+template <int N, int Threads = SSC_ITEM>
+__device__ inline void block_sum(double (&v)[N]) {
+  __shared__ double part[N][Threads / 32];
+  __shared__ double total[N];
+  double s[N];
+  warp0_block_totals<N, Threads>(v, part, s);
+  if (threadIdx.x == 0)
+#pragma unroll
+    for (int k = 0; k < N; ++k) total[k] = s[k];
   __syncthreads();
 #pragma unroll
   for (int k = 0; k < N; ++k) v[k] = total[k];
@@ -121,24 +133,12 @@ __device__ inline void grid_sync(unsigned long long* bar) {
 // block total plus zeros).
 template <int N>
 __device__ inline void grid_sum(double (&v)[N], double* partial, unsigned long long* bar) {
-  constexpr int kWarps = SSC_GRID / 32;
-  __shared__ double part[N][kWarps];
+  __shared__ double part[N][SSC_GRID / 32];
   __shared__ double total[N];
   const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
-#pragma unroll
-  for (int k = 0; k < N; ++k)
-    for (int o = 16; o > 0; o >>= 1) v[k] += __shfl_down_sync(0xffffffffu, v[k], o);
-  if (lane == 0)
-#pragma unroll
-    for (int k = 0; k < N; ++k) part[k][warp] = v[k];
-  __syncthreads();
+  double s[N];
+  warp0_block_totals<N, SSC_GRID>(v, part, s);
   if (warp == 0) {
-    double s[N];
-#pragma unroll
-    for (int k = 0; k < N; ++k) {
-      s[k] = lane < kWarps ? part[k][lane] : 0.0;
-      for (int o = 16; o > 0; o >>= 1) s[k] += __shfl_down_sync(0xffffffffu, s[k], o);
-    }
     if (gridDim.x > 1) {
       if (lane == 0) {
 #pragma unroll
