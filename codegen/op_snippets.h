@@ -24,8 +24,10 @@ namespace ssc {
 // gen::grid_sync / gen::grid_sum (persistent solver loops).
 
 constexpr int kItemBlock = 1024;  // threads of an Extent::Item block (SSC_ITEM)
-constexpr int kGridBlock = 256;      // threads of an Extent::Grid block (SSC_GRID)
-constexpr int kMaxGridBlocks = 256;  // blocks per batch item of an Extent::Grid kernel
+// Threads of an Extent::Grid block (SSC_GRID). 128 measured faster than 256 on the peer's
+// dragon at batch 1 and 32 (docs/benchmarks.md, session 33).
+constexpr int kGridBlock = 128;
+constexpr int kMaxGridBlocks = 512;  // blocks per batch item of an Extent::Grid kernel
 constexpr int kMaxSolveLog = 8;      // solves per step whose final state is kept (s_cg_log)
 
 struct KernelParam {
