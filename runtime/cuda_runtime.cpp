@@ -340,15 +340,15 @@ void GpuTimestep::Impl::decide_newmark_grid() {
   if (phases == 1) newmark_grid = "newmark_pcg_grid_one_phase";
 }
 
-// The persistent solves' register cap. Uncapped (255 registers), they hold two blocks of 128
-// threads per multiprocessor; where the batch wants several times more blocks (one thread per
-// cell corner), each block loops over several corners and the solve is throughput-bound, and
-// three blocks per multiprocessor (at most 170 registers) hide more latency. Measured with
-// blocks of 256 threads (three of them: at most 85 registers) on an H100 (docs/benchmarks.md):
-// the dragon at batch 32 (12x the multiprocessors) 1.30x faster forward, 1.35x adjoint; at
-// batch 1 the cap costs 11 %; the CalculiX cube at batch 16 (2.7x) gained nothing, at batch 64
-// (11x) 6 %. With 128-thread blocks and this cap, batch 32 ran as fast as before or faster
-// (docs/benchmarks.md, session 33).
+// The persistent solves' register cap. Uncapped (the one-phase solve takes 255 registers),
+// they hold two blocks of 128 threads per multiprocessor; where the batch wants several times
+// more blocks (one thread per cell corner), each block loops over several corners and the
+// solve is throughput-bound, and three blocks per multiprocessor (at most 170 registers) hide
+// more latency. Measured with blocks of 256 threads (three of them: at most 85 registers) on
+// an H100 (docs/benchmarks.md): the dragon at batch 32 (12x the multiprocessors) 1.30x faster
+// forward, 1.35x adjoint; at batch 1 the cap costs 11 %; the CalculiX cube at batch 16 (2.7x)
+// gained nothing, at batch 64 (11x) 6 %. With 128-thread blocks and this cap, batch 32 ran as
+// fast as before or faster (docs/benchmarks.md, session 33).
 void GpuTimestep::Impl::decide_grid_min_blocks() {
   d->DeviceGetAttribute(&multiprocessors, cu::kAttrMultiprocessorCount, device);
   const long wanted = wanted_blocks(std::max({8L * sizes.cell, long(sizes.node), long(sizes.band)})) * batch;
