@@ -29,7 +29,11 @@ SYNC_OPS = ("BAR.", "MEMBAR", "ATOM", "RED.", "ERRBAR", "CCTL", "NANOSLEEP")
 
 def first_kernel(path):
     header, rows, name = None, [], None
-    with open(path, newline="") as f:
+    try:
+        f = open(path, newline="")
+    except OSError as e:
+        sys.exit(f"{path}: {e.strerror}")
+    with f:
         for r in csv.reader(f):
             if r and r[0] == "Kernel Name":
                 if name is not None:
