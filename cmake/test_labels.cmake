@@ -12,7 +12,7 @@ set(SSC_TEST_LABELS unit physics cli slow gpu)
 set(SSC_DEFAULT_TEST_LABEL unit)
 
 set(SSC_TESTS_unit
-  BatchLoop CodegenPlan CodegenSha256 CodegenSource
+  BatchLoop CodegenPlan GalerkinStart CodegenSha256 CodegenSource
   CutCellIntegrals CutCellSphere SurfaceExtraction SurfacePly
   GeometryGridPlacement GeometryMesh GeometryMeshSdf GeometryPrimitives GeometrySdfFile GeometryTransform
   CameraTest DepthPngTest DepthRenderTest ObservationTest

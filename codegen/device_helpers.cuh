@@ -149,7 +149,7 @@ __device__ inline void grid_sum(double (&v)[N], double* partial, unsigned long l
         }
       }
       __syncwarp();
-      constexpr int kMaxLoads = 8;  // blocks up to 256 loaded at once; more in further rounds
+      constexpr int kMaxLoads = N <= 4 ? 8 : 1;  // blocks up to 256 loaded at once (small N); more in further rounds
 #pragma unroll
       for (int k = 0; k < N; ++k) s[k] = 0;
       for (int j0 = lane; j0 < int(gridDim.x); j0 += 32 * kMaxLoads) {

@@ -28,6 +28,7 @@ constexpr int kItemBlock = 1024;  // threads of an Extent::Item block (SSC_ITEM)
 // dragon at batch 1 and 32 (docs/benchmarks.md, session 33).
 constexpr int kGridBlock = 128;
 constexpr int kMaxGridBlocks = 512;  // blocks per batch item of an Extent::Grid kernel
+constexpr int kMaxGridSum = 20;      // doubles in one grid sum (the Galerkin start's, ops/galerkin_start.h)
 constexpr int kMaxSolveLog = 8;      // solves per step whose final state is kept (s_cg_log)
 
 struct KernelParam {

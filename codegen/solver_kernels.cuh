@@ -10,6 +10,7 @@
 #include "codegen/device_helpers.cuh"
 #include "ops/corotation.h"
 #include "ops/elasticity.h"
+#include "ops/galerkin_start.h"
 #include "ops/gather.h"
 #include "ops/newmark.h"
 #include "ops/ssc_math.h"
@@ -534,6 +535,129 @@ struct CornerElement {
   }
 };
 
+// ---- The time-step solve's Galerkin start (ops/galerkin_start.h) ----
+//
+// The solve starts at x0 + D a, the best point of the span of ops::newmark_start_direction
+// around newmark_init's x0. The sums of D^T A D and D^T (b - A x0) are split as delta's are:
+// a_k (d_i . K_e d_j) and -a_k (x0 . K_e d_j) per cell corner (at the corner's node), the
+// node terms d_i . (a_m m + C) d_j and d_j . (b - (a_m m + C) x0) per free node. K_e of a
+// translation (directions 2 to 4) is zero (the element's energy does not change under a
+// rigid shift), so only directions 0 and 1 are applied to the element.
+
+// The directions at a node, zero on fixed nodes. A fragment passes them, or nullptr (NoStart)
+// where the solve has no such start: an adjoint solve, or an op with a guess.
+template <class R>
+struct StartDirections {
+  R dt;
+  const R* v_prev;
+  const R* v_before;  // nullptr when the op has none
+  __device__ __forceinline__ Vec3<R> at(int j, int m, bool fixed) const {
+    if (fixed) return zero3<R>();
+    return make_vec3(ops::newmark_start_direction(j, dt, v_prev, v_before, 3 * m),
+                     ops::newmark_start_direction(j, dt, v_prev, v_before, 3 * m + 1),
+                     ops::newmark_start_direction(j, dt, v_prev, v_before, 3 * m + 2));
+  }
+};
+using NoStart = decltype(nullptr);
+constexpr int kStartDirections = ops::kStartDirections;
+constexpr int kStartSums = ops::kStartSums<kStartDirections>;
+constexpr int kElementDirections = 2;  // the directions K_e does not annihilate
+
+template <class R>
+__device__ __forceinline__ double dot_double(Vec3<R> a, Vec3<R> b) {
+  return double(a.x) * double(b.x) + double(a.y) * double(b.y) + double(a.z) * double(b.z);
+}
+
+// The thread's shares of the sums: cell corners t = first, first + stride, ... (whole warps:
+// the element apply shuffles) and nodes n = first, first + stride, ...; x holds x0, b the
+// masked right-hand side. node_system(n, e) = (a_m m + C) e at free node n.
+template <class R, class NodeSystem>
+__device__ __forceinline__ void start_shares(const StartDirections<R>& dirs, int first, int stride, int n_cell,
+                                             int n_node, R h, R a_k, const R* rotation, const R* cell_weights,
+                                             const int* cell_nodes, const R* lambda, const R* mu, const R* fixed,
+                                             const R* x, const R* b, NodeSystem node_system,
+                                             double (&acc)[kStartSums]) {
+  for (int k = 0; k < kStartSums; ++k) acc[k] = 0;
+  const int lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
+  for (int t = first; t < lanes_warps; t += stride) {
+    const bool valid = t < lanes;
+    const int m = valid ? cell_nodes[t] : 0;
+    const bool free = valid && fixed[m] == R(0);
+    const CornerElement<R> element(t, valid, rotation, cell_weights, lambda, mu);
+    const Vec3<R> x0 = load3(x, m);
+#pragma unroll
+    for (int j = 0; j < kElementDirections; ++j) {
+      const Vec3<R> y = element.apply(h, dirs.at(j, m, !free));
+      if (!free) continue;
+#pragma unroll
+      for (int i = 0; i <= j; ++i) add_corner_delta(acc[ops::gram_index<kStartDirections>(i, j)], a_k, y, dirs.at(i, m, false));
+      add_corner_delta(acc[ops::start_rhs_index<kStartDirections>(j)], -a_k, y, x0);
+    }
+  }
+  for (int n = first; n < n_node; n += stride) {
+    if (fixed[n] != R(0)) continue;
+    const Vec3<R> rest = load3(b, n) - node_system(n, load3(x, n));
+#pragma unroll
+    for (int j = 0; j < kStartDirections; ++j) {
+      const Vec3<R> dj = dirs.at(j, n, false), mj = node_system(n, dj);
+#pragma unroll
+      for (int i = 0; i <= j; ++i) acc[ops::gram_index<kStartDirections>(i, j)] += dot_double(dirs.at(i, n, false), mj);
+      acc[ops::start_rhs_index<kStartDirections>(j)] += dot_double(dj, rest);
+    }
+  }
+}
+
+// From the item's sums: x += D a at nodes n = first, first + stride, ...
+template <class R>
+__device__ __forceinline__ void start_moves(const StartDirections<R>& dirs, int first, int stride, int n_node,
+                                            const R* fixed, const double (&sums)[kStartSums], R* x) {
+  double a[kStartDirections];
+  ops::galerkin_coefficients<kStartDirections>(sums, ops::galerkin_cut<R>(), a);
+  for (int n = first; n < n_node; n += stride) {
+    if (fixed[n] != R(0)) continue;
+    for (int k = 0; k < 3; ++k) {
+      double s = double(x[3 * n + k]);
+#pragma unroll
+      for (int j = 0; j < kStartDirections; ++j)
+        s += a[j] * double(ops::newmark_start_direction(j, dirs.dt, dirs.v_prev, dirs.v_before, 3 * n + k));
+      x[3 * n + k] = R(s);
+    }
+  }
+}
+
+// The start in a grid solve, after its setup: the shares, one grid sum, the moves at the own
+// nodes, a grid barrier. Nothing without a start.
+template <class R, class NodeSystem>
+__device__ __forceinline__ void newmark_grid_start(GridPcg<R>& g, const StartDirections<R>& dirs, int n_cell,
+                                                   int n_node, R h, R a_k, const R* rotation, const R* cell_weights,
+                                                   const int* cell_nodes, const R* lambda, const R* mu,
+                                                   const R* fixed, NodeSystem node_system) {
+  double sums[kStartSums];
+  start_shares(dirs, g.rank, g.threads, n_cell, n_node, h, a_k, rotation, cell_weights, cell_nodes, lambda, mu, fixed,
+               g.x, g.b, node_system, sums);
+  g.sum(sums);
+  start_moves(dirs, g.rank, g.threads, n_node, fixed, sums, g.x);
+  grid_sync(g.bar);
+}
+template <class R, class NodeSystem>
+__device__ __forceinline__ void newmark_grid_start(GridPcg<R>&, NoStart, int, int, R, R, const R*, const R*,
+                                                   const int*, const R*, const R*, const R*, NodeSystem) {}
+
+// The start in the host-driven sequence (after newmark_setup): one block per batch item.
+template <class R, class Damping>
+__device__ __forceinline__ void newmark_start_item(int i, const ops::NewmarkCoefficients<R>& c,
+                                                   const StartDirections<R>& dirs, int n_cell, int n_node, R h,
+                                                   const R* rotation, const R* cell_weights, const int* cell_nodes,
+                                                   const R* lambda, const R* mu, const R* mass, const R* fixed,
+                                                   Damping damping, const R* b, R* x) {
+  auto node_system = [&](int n, Vec3<R> e) { return newmark_node_apply(c, mass, damping, n, e, zero3<R>()); };
+  double sums[kStartSums];
+  start_shares(dirs, i, SSC_ITEM, n_cell, n_node, h, c.a_k, rotation, cell_weights, cell_nodes, lambda, mu, fixed, x,
+               b, node_system, sums);
+  block_sum<kStartSums>(sums);
+  start_moves(dirs, i, SSC_ITEM, n_node, fixed, sums, x);
+}
+
 // A grid solve's setup (newmark_diag and newmark_setup of the host-driven sequence): the
 // corners of the stiffness diagonal, a grid barrier, per node the Jacobi diagonal, the
 // masked right-hand side and x = 0 on fixed nodes (everywhere with zero_x), a grid barrier.
@@ -561,12 +685,12 @@ __device__ __forceinline__ void newmark_grid_setup(GridPcg<R>& g, const ops::New
 // summed as a_k (corner force . u) over the corners plus the node terms (a_m m u + C u) . u
 // over the nodes (a fixed node's u is 0), so the reduction can follow the cell phase and no w
 // is stored.
-template <class R, class Damping>
+template <class R, class Damping, class Start>
 __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::NewmarkCoefficients<R>& c, int n_cell,
                                                  int n_node, R h, const R* rotation, const R* cell_weights,
                                                  const int* cell_nodes, const R* lambda, const R* mu, const R* mass,
                                                  const R* fixed, Damping damping, const int* node_cell_offset,
-                                                 const int* node_cell_entry, R* corner) {
+                                                 const int* node_cell_entry, R* corner, Start directions) {
   const int rank = g.rank, threads = g.threads, lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
   // The thread's first cell corner and node keep their incidence in registers.
   const int corner_node = rank < lanes ? cell_nodes[rank] : 0;
@@ -605,6 +729,8 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
   auto node_sums = [&](int n, Vec3<R> rn, Vec3<R> un, double (&acc)[3]) {
     add_pcg_sums(acc, rn, un, system(n, un, zero3<R>()));
   };
+  newmark_grid_start(g, directions, n_cell, n_node, h, c.a_k, rotation, cell_weights, cell_nodes, lambda, mu, fixed,
+                     [&](int n, Vec3<R> e) { return newmark_node_apply(c, mass, damping, n, e, zero3<R>()); });
   double unused = 0;
   cells(g.x, unused);
   grid_sync(g.bar);
@@ -694,14 +820,14 @@ struct CornerLane {
 // at other nodes while owners write the next ones); u = M^-1 r is not stored. The thread's
 // first corner lane stays in registers for the whole solve; further ones (small grids) are
 // read each phase.
-template <class R, class Damping>
+template <class R, class Damping, class Start>
 __device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const ops::NewmarkCoefficients<R>& c,
                                                            int n_cell, int n_node, R h, const R* rotation,
                                                            const R* cell_weights, const int* cell_nodes,
                                                            const R* lambda, const R* mu, const R* mass,
                                                            const R* fixed, Damping damping,
                                                            const int* node_cell_offset, const int* node_cell_entry,
-                                                           R* corner, R* corner2, R* r2, R* s2) {
+                                                           R* corner, R* corner2, R* r2, R* s2, Start directions) {
   const int rank = g.rank, threads = g.threads, lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
   auto lane = [&](int t) {
     return CornerLane<R>(t, lanes, rotation, cell_weights, lambda, mu, cell_nodes, g.inv_diag, mass, fixed,
@@ -753,6 +879,8 @@ __device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const 
       else work(t, lane(t), start, in, out, r_in, s_in, r_out, s_out, acc);
     }
   };
+  newmark_grid_start(g, directions, n_cell, n_node, h, c.a_k, rotation, cell_weights, cell_nodes, lambda, mu, fixed,
+                     [&](int n, Vec3<R> e) { return newmark_node_apply(c, mass, damping, n, e, zero3<R>()); });
   // The corners of A x.
   for (int t = rank; t < lanes_warps; t += threads) {
     const CornerLane<R> L = t == rank ? own : lane(t);

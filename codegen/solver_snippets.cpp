@@ -9,6 +9,8 @@
 #include <fmt/format.h>
 
 #include "codegen/snippet_builder.h"
+#include "ops/galerkin_start.h"
+#include "ops/newmark.h"
 
 namespace ssc {
 namespace {
@@ -73,17 +75,30 @@ Builder& grid_solve_params(Builder& b, const std::string& len, const std::string
   b.value("tol", "double").value("max_it", "int").value("log_slot", "int").value("reference_mode", "int");
   reference(b).scratch("cg", "cg", "double", Domain::Scalar, 16, true);
   b.scratch("cg_log", "cg_log", "double", Domain::Scalar, 16 * kMaxSolveLog, true);
-  b.scratch("partial", "grid_partial", "double", Domain::Scalar, 2 * 4 * kMaxGridBlocks, true);
+  b.scratch("partial", "grid_partial", "double", Domain::Scalar, 2 * kMaxGridSum * kMaxGridBlocks, true);
   return b.scratch("bar", "grid_barrier_" + kernel, "double", Domain::Scalar, 1, true);
 }
 
 // The grid solve's state `pcg` over the bindings of grid_solve_params (the partial sums
-// in two halves of 4 * kMaxGridBlocks doubles).
+// in two halves of kMaxGridSum * kMaxGridBlocks doubles).
 std::string grid_state() {
   return fmt::format(
       "gen::GridPcg<Real> pcg(v_x, v_b, v_inv_diag, v_r, v_w, v_s, v_z, v_p, v_iterations, tol, max_it, log_slot,\n"
       "                       $cg, $cg_log, $reference, reference_mode, $partial, {}, $bar);\n",
-      4 * kMaxGridBlocks);
+      kMaxGridSum * kMaxGridBlocks);
+}
+static_assert(kMaxGridSum >= ops::kStartSums<ops::kStartDirections>, "the Galerkin start's sums fit the partials");
+
+// The Galerkin start's directions (gen::StartDirections, ops/galerkin_start.h) of a forward
+// solve without a guess: binds v_prev (and v_before) and returns the argument that passes
+// them ("nullptr" for no such start).
+std::string bind_start(const Graph& g, int op, bool adjoint, Builder& b) {
+  const OpNode& node = g.ops().at(op);
+  if (adjoint || node.bound("guess")) return "nullptr";
+  b.t("v_prev");
+  const bool before = node.bound("v_before");
+  if (before) b.t("v_before");
+  return std::string("gen::StartDirections<Real>{c.dt, $v_prev, ") + (before ? "$v_before" : "nullptr") + "}";
 }
 
 // A node-local damping matrix C in the system (friction, ops/newmark.h), when the op's
@@ -98,12 +113,14 @@ std::string bind_damping(const Graph& g, int op, Builder& b) {
 // The time-step system (a_m M + a_k K) on the free nodes, identity on fixed ones: the whole
 // PCG solve in one cooperative kernel in the form `form` (codegen/solver_kernels.cuh), its
 // setup first (gen::newmark_grid_setup: the Jacobi diagonal and the masked right-hand side
-// from rhs, as newmark_diag and newmark_setup of the host-driven sequence). The one-phase
-// form alternates r, s and the corner forces with r2, s2 and corner2.
-Snippet newmark_grid(const Graph& g, int op, const std::string& form, const std::string& barrier, bool one_phase,
-                     const std::string& stage) {
+// from rhs, as newmark_diag and newmark_setup of the host-driven sequence), then a forward
+// solve's Galerkin start (as newmark_start). The one-phase form alternates r, s and the
+// corner forces with r2, s2 and corner2.
+Snippet newmark_grid(const Graph& g, int op, bool adjoint, const std::string& form, const std::string& barrier,
+                     bool one_phase, const std::string& stage) {
   Builder b(g, op, form, Extent::Grid);
   const std::string damping = bind_damping(g, op, b);
+  const std::string start = bind_start(g, op, adjoint, b);
   b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
   newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
   b.scratch("corner", "corner", "Real", Domain::Cell, 24, true, true);
@@ -118,7 +135,7 @@ Snippet newmark_grid(const Graph& g, int op, const std::string& form, const std:
                            damping + ", g_node_cell_offset, g_node_cell_entry";
   return b.code(std::string(kCoefficients) + grid_state() + "gen::newmark_grid_setup<Real>(pcg, " + args +
                 ", v_rhs, zero_x, v_b, v_inv_diag, $corner);\n" + "gen::" + form + "<Real>(pcg, " + args +
-                (one_phase ? ", $corner, $corner2, v_r2, v_s2);\n" : ", $corner);\n"));
+                (one_phase ? ", $corner, $corner2, v_r2, v_s2, " : ", $corner, ") + start + ");\n");
 }
 
 // The band Laplacian, one phase per iteration: r, w, s alternate with r2, w2, s2.
@@ -173,6 +190,18 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
                        ", $corner, g_node_cell_offset, g_node_cell_entry, v_rhs,\n"
                        "                         zero_x, v_x, v_b, v_inv_diag);\n"));
   }
+  if (!adjoint && !g.ops().at(op).bound("guess")) {
+    Builder b(g, op, "newmark_start", Extent::Item);
+    const std::string damping = bind_damping(g, op, b);
+    const std::string start = bind_start(g, op, adjoint, b);
+    b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
+    newmark_scalars(b).t("mass").t("fixed").vec("b", false, x3).vec("x", true, x3);
+    b.stage("x = the best point of the start's span (ops/galerkin_start.h, block per item)", true);
+    s.push_back(b.code(std::string(kCoefficients) + "gen::newmark_start_item<Real>(i, c, " + start +
+                       ", n_cell, n_node, h, $rotation, g_cell_weights,\n"
+                       "                             g_cell_nodes, $lambda, $mu, $mass, $fixed, " +
+                       damping + ", v_b, v_x);\n"));
+  }
   {
     Builder b(g, op, "newmark_apply_cell", Extent::Cell);
     b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
@@ -195,10 +224,10 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
                                  "                              v_p, v_q);\n"));
   }
   for (Snippet& p : pcg_snippets(g, op)) s.push_back(p);
-  s.push_back(newmark_grid(g, op, "newmark_pcg_grid", "newmark", false,
+  s.push_back(newmark_grid(g, op, adjoint, "newmark_pcg_grid", "newmark", false,
                            "whole PCG solve in one cooperative kernel: its setup, then per iteration node update "
                            "storing u, element apply of u (grid barriers)"));
-  s.push_back(newmark_grid(g, op, "newmark_pcg_grid_one_phase", "newmark_one_phase", true,
+  s.push_back(newmark_grid(g, op, adjoint, "newmark_pcg_grid_one_phase", "newmark_one_phase", true,
                            "whole PCG solve in one cooperative kernel: its setup, then one phase per iteration "
                            "(node gathers at the corners)"));
   return s;

@@ -208,6 +208,18 @@ SSC_HD inline Real newmark_start(Real dt, Real theta, const Real* u_prev, const 
   return v_before ? u + theta * dt * (v_prev[k] - v_before[k]) : u;
 }
 
+// The solve then starts at the best point (ops/galerkin_start.h) of u- + the span of
+// kStartDirections directions, which holds newmark_start: dt v-, dt (v- - v_before) (zero
+// without v_before) and the three translations. Component k of direction j, before the
+// caller zeroes it on fixed nodes. On the paper's dragon 74.0 -> 62.9 CG iterations a step.
+constexpr int kStartDirections = 5;
+template <class Real>
+SSC_HD inline Real newmark_start_direction(int j, Real dt, const Real* v_prev, const Real* v_before, int k) {
+  if (j == 0) return dt * v_prev[k];
+  if (j == 1) return v_before ? dt * (v_prev[k] - v_before[k]) : Real(0);
+  return k % 3 == j - 2 ? Real(1) : Real(0);
+}
+
 // ---- the velocity_update op ----
 
 template <class Real>

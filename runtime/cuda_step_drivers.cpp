@@ -1,12 +1,13 @@
 // What one GPU timestep launches (see cuda_runtime.h): the planned kernels in order,
 // forward or adjoint, with each opaque op's solver stage sequence in their place.
 //
-// Forward: newmark_init, then the time-step solve; the extension: setup (rhs from the active
+// Forward: newmark_init, then the time-step solve, started at the best point of a small space
+// around newmark_init's guess (ops/galerkin_start.h); the extension: setup (rhs from the active
 // neighbours, the guess), PCG with the band Laplacian on band_u. With grid solves each PCG is
 // one persistent grid kernel, whose outcomes the host reads after the step: newmark_pcg_grid
 // or its one-phase form for batch 1 (either computes its Jacobi diagonal and masked
 // right-hand side itself); extension_pcg_grid, or its two-phase form for large batches.
-// Without: newmark_diag, newmark_setup and the host-driven iteration kernels (element apply:
+// Without: newmark_diag, newmark_setup, newmark_start and the host-driven iteration kernels (element apply:
 // cell kernel, node gather).
 // Where the extension is one dense product (runtime/band_operator.h), it is a single
 // kernel each way instead.
@@ -76,6 +77,11 @@ void GpuTimestep::Impl::newmark(int o) {
     return;
   }
   newmark_setup(o, rhs, u, false);
+  if (!op.bound("guess")) {  // the Galerkin start (ops/galerkin_start.h)
+    Call start;
+    start.vectors = {{"v_b", scratch.at("v_b").ptr}, {"v_x", u}};
+    launch(kernel("newmark_start", false, o), start);
+  }
   cg_iterations = pcg(u, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(o),
                       "time-step solve", fmt::format("newmark {}", o), 0);
   write_iterations(op.output("cg_iterations"), cg_iterations);

@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <stdexcept>
@@ -17,6 +18,7 @@
 #include "runtime/errors.h"
 #include "runtime/band_factor.h"
 #include "runtime/element_packs.h"
+#include "runtime/galerkin_start.h"
 #include "runtime/pcg.h"
 #include "runtime/system_dump.h"
 
@@ -190,6 +192,19 @@ void newmark_forward(Interpreter<Real>& in, const OpNode& op, int b) {
     u[i] = fixed[i / 3] != Real(0) ? Real(0)
            : guess                 ? guess[i]
                                    : ops::newmark_start(system.c.dt, system.c.theta, u_prev, v_prev, v_before, i);
+  if (!guess) {  // the best point of u- + the span of ops::newmark_start_direction
+    const long n = 3L * g.node_count;
+    std::array<std::vector<Real>, ops::kStartDirections> d;
+    for (int j = 0; j < ops::kStartDirections; ++j) {
+      d[j].resize(n);
+      for (long i = 0; i < n; ++i)
+        d[j][i] = fixed[i / 3] != Real(0) ? Real(0)
+                                          : ops::newmark_start_direction(j, system.c.dt, v_prev, v_before, int(i));
+    }
+    std::vector<Real> corner(24 * size_t(g.cell_count));
+    galerkin_start<ops::kStartDirections, Real>(
+        n, [&](const Real* p, Real* q) { system.apply(p, q, corner); }, a.value("rhs"), d, u);
+  }
   const SolverOptions& o = in.options();
   if (b == 0)
     dump_system_if_asked(g, a.value("rhs"), u, [&](int node) { return system.is_fixed(node); },
