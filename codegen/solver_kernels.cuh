@@ -542,15 +542,18 @@ struct CornerElement {
 // a_k (d_i . K_e d_j) and -a_k (x0 . K_e d_j) per cell corner (at the corner's node), the
 // node terms d_i . (a_m m + C) d_j and d_j . (b - (a_m m + C) x0) per free node. K_e of a
 // translation (directions 2 to 4) is zero (the element's energy does not change under a
-// rigid shift), so only directions 0 and 1 are applied to the element.
+// rigid shift), so those are applied to the element only in warps with a cell that has a
+// fixed corner, where the direction is zeroed.
 
 // The directions at a node, zero on fixed nodes. A fragment passes them, or nullptr (NoStart)
-// where the solve has no such start: an adjoint solve, or an op with a guess.
+// where the op has a guess. A forward grid kernel also runs the adjoint solves, which start
+// elsewhere: there active is false.
 template <class R>
 struct StartDirections {
   R dt;
   const R* v_prev;
   const R* v_before;  // nullptr when the op has none
+  bool active;
   __device__ __forceinline__ Vec3<R> at(int j, int m, bool fixed) const {
     if (fixed) return zero3<R>();
     return make_vec3(ops::newmark_start_direction(j, dt, v_prev, v_before, 3 * m),
@@ -561,7 +564,7 @@ struct StartDirections {
 using NoStart = decltype(nullptr);
 constexpr int kStartDirections = ops::kStartDirections;
 constexpr int kStartSums = ops::kStartSums<kStartDirections>;
-constexpr int kElementDirections = 2;  // the directions K_e does not annihilate
+constexpr int kElementDirections = 2;  // the directions K_e does not annihilate where none is fixed
 
 template <class R>
 __device__ __forceinline__ double dot_double(Vec3<R> a, Vec3<R> b) {
@@ -585,12 +588,15 @@ __device__ __forceinline__ void start_shares(const StartDirections<R>& dirs, int
     const bool free = valid && fixed[m] == R(0);
     const CornerElement<R> element(t, valid, rotation, cell_weights, lambda, mu);
     const Vec3<R> x0 = load3(x, m);
+    const bool near_fixed = __any_sync(0xffffffffu, valid && !free);
 #pragma unroll
-    for (int j = 0; j < kElementDirections; ++j) {
+    for (int j = 0; j < kStartDirections; ++j) {
+      if (j >= kElementDirections && !near_fixed) break;  // warp-uniform
       const Vec3<R> y = element.apply(h, dirs.at(j, m, !free));
       if (!free) continue;
 #pragma unroll
-      for (int i = 0; i <= j; ++i) add_corner_delta(acc[ops::gram_index<kStartDirections>(i, j)], a_k, y, dirs.at(i, m, false));
+      for (int i = 0; i <= j; ++i)
+        add_corner_delta(acc[ops::gram_index<kStartDirections>(i, j)], a_k, y, dirs.at(i, m, false));
       add_corner_delta(acc[ops::start_rhs_index<kStartDirections>(j)], -a_k, y, x0);
     }
   }
@@ -601,7 +607,8 @@ __device__ __forceinline__ void start_shares(const StartDirections<R>& dirs, int
     for (int j = 0; j < kStartDirections; ++j) {
       const Vec3<R> dj = dirs.at(j, n, false), mj = node_system(n, dj);
 #pragma unroll
-      for (int i = 0; i <= j; ++i) acc[ops::gram_index<kStartDirections>(i, j)] += dot_double(dirs.at(i, n, false), mj);
+      for (int i = 0; i <= j; ++i)
+        acc[ops::gram_index<kStartDirections>(i, j)] += dot_double(dirs.at(i, n, false), mj);
       acc[ops::start_rhs_index<kStartDirections>(j)] += dot_double(dj, rest);
     }
   }
@@ -632,6 +639,7 @@ __device__ __forceinline__ void newmark_grid_start(GridPcg<R>& g, const StartDir
                                                    int n_node, R h, R a_k, const R* rotation, const R* cell_weights,
                                                    const int* cell_nodes, const R* lambda, const R* mu,
                                                    const R* fixed, NodeSystem node_system) {
+  if (!dirs.active) return;
   double sums[kStartSums];
   start_shares(dirs, g.rank, g.threads, n_cell, n_node, h, a_k, rotation, cell_weights, cell_nodes, lambda, mu, fixed,
                g.x, g.b, node_system, sums);

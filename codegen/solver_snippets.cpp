@@ -91,14 +91,15 @@ static_assert(kMaxGridSum >= ops::kStartSums<ops::kStartDirections>, "the Galerk
 
 // The Galerkin start's directions (gen::StartDirections, ops/galerkin_start.h) of a forward
 // solve without a guess: binds v_prev (and v_before) and returns the argument that passes
-// them ("nullptr" for no such start).
-std::string bind_start(const Graph& g, int op, bool adjoint, Builder& b) {
+// them ("nullptr" for no such start), active where `active` (a C++ expression) holds.
+std::string bind_start(const Graph& g, int op, bool adjoint, Builder& b, const std::string& active) {
   const OpNode& node = g.ops().at(op);
   if (adjoint || node.bound("guess")) return "nullptr";
   b.t("v_prev");
   const bool before = node.bound("v_before");
   if (before) b.t("v_before");
-  return std::string("gen::StartDirections<Real>{c.dt, $v_prev, ") + (before ? "$v_before" : "nullptr") + "}";
+  return std::string("gen::StartDirections<Real>{c.dt, $v_prev, ") + (before ? "$v_before" : "nullptr") + ", " +
+         active + "}";
 }
 
 // A node-local damping matrix C in the system (friction, ops/newmark.h), when the op's
@@ -114,13 +115,15 @@ std::string bind_damping(const Graph& g, int op, Builder& b) {
 // PCG solve in one cooperative kernel in the form `form` (codegen/solver_kernels.cuh), its
 // setup first (gen::newmark_grid_setup: the Jacobi diagonal and the masked right-hand side
 // from rhs, as newmark_diag and newmark_setup of the host-driven sequence), then a forward
-// solve's Galerkin start (as newmark_start). The one-phase form alternates r, s and the
-// corner forces with r2, s2 and corner2.
+// solve's Galerkin start (as newmark_start; the value galerkin_start is 0 where the forward
+// kernel runs an adjoint solve). The one-phase form alternates r, s and the corner forces
+// with r2, s2 and corner2.
 Snippet newmark_grid(const Graph& g, int op, bool adjoint, const std::string& form, const std::string& barrier,
                      bool one_phase, const std::string& stage) {
   Builder b(g, op, form, Extent::Grid);
   const std::string damping = bind_damping(g, op, b);
-  const std::string start = bind_start(g, op, adjoint, b);
+  const std::string start = bind_start(g, op, adjoint, b, "galerkin_start != 0");
+  if (start != "nullptr") b.value("galerkin_start", "int");
   b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
   newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
   b.scratch("corner", "corner", "Real", Domain::Cell, 24, true, true);
@@ -193,7 +196,7 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
   if (!adjoint && !g.ops().at(op).bound("guess")) {
     Builder b(g, op, "newmark_start", Extent::Item);
     const std::string damping = bind_damping(g, op, b);
-    const std::string start = bind_start(g, op, adjoint, b);
+    const std::string start = bind_start(g, op, adjoint, b, "true");
     b.t("rotation").t("lambda").t("mu").grid("cell_weights", "Real").grid("cell_nodes", "int");
     newmark_scalars(b).t("mass").t("fixed").vec("b", false, x3).vec("x", true, x3);
     b.stage("x = the best point of the start's span (ops/galerkin_start.h, block per item)", true);

@@ -648,7 +648,7 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
 // `iterations` receives the iteration count per batch item on the device.
 void GpuTimestep::Impl::grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it,
                                  cu::DevicePtr iterations, const char* what, std::vector<int>* iterations_out,
-                                 int reference_mode, cu::DevicePtr rhs, bool zero_x) {
+                                 int reference_mode, cu::DevicePtr rhs, bool zero_x, bool galerkin_start) {
   const int slot = int(solve_checks.size());
   if (slot >= kMaxSolveLog) throw std::logic_error("gpu: more grid solves in one step than s_cg_log holds");
   Call c;
@@ -657,7 +657,8 @@ void GpuTimestep::Impl::grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long w
               {"max_it", double(max_it)},
               {"log_slot", double(slot)},
               {"reference_mode", double(reference_mode)},
-              {"zero_x", zero_x ? 1.0 : 0.0}};  // a Newmark grid solve's setup (the extension's has none)
+              {"zero_x", zero_x ? 1.0 : 0.0},  // a Newmark grid solve's setup (the extension's has none)
+              {"galerkin_start", galerkin_start ? 1.0 : 0.0}};  // a forward time-step solve's start
   for (const char* v : {"v_b", "v_inv_diag", "v_r", "v_w", "v_s", "v_z", "v_p", "v_r2", "v_w2", "v_s2"})
     c.vectors[v] = scratch.at(v).ptr;
   c.vectors["v_x"] = x;

@@ -68,16 +68,18 @@ void GpuTimestep::Impl::newmark_setup(int o, cu::DevicePtr rhs, cu::DevicePtr x,
 
 void GpuTimestep::Impl::newmark(int o) {
   const OpNode& op = graph.ops()[o];
+  static const bool no_start = std::getenv("SSC_GPU_NO_GALERKIN_START") != nullptr;  // for comparisons
+  const bool start = !op.bound("guess") && !no_start;
   const cu::DevicePtr u = tensors.at(op.output("u")).ptr, rhs = tensors.at(op.input("rhs")).ptr;
   launch(kernel("newmark_init", false, o));
   if (grid_solves) {  // the grid kernel runs its setup itself
     grid_pcg(kernel(newmark_grid, false, o), u, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
              solver.cg_max_iterations, tensors.at(op.output("cg_iterations")).ptr, "time-step solve", &cg_iterations,
-             0, rhs, false);
+             0, rhs, false, start);
     return;
   }
   newmark_setup(o, rhs, u, false);
-  if (!op.bound("guess")) {  // the Galerkin start (ops/galerkin_start.h)
+  if (start) {  // the Galerkin start (ops/galerkin_start.h)
     Call start;
     start.vectors = {{"v_b", scratch.at("v_b").ptr}, {"v_x", u}};
     launch(kernel("newmark_start", false, o), start);

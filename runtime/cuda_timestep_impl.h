@@ -168,7 +168,7 @@ struct GpuTimestep::Impl {
   // (its right-hand side; x = 0 everywhere first).
   void grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it, cu::DevicePtr iterations,
                 const char* what, std::vector<int>* iterations_out, int reference_mode, cu::DevicePtr rhs = 0,
-                bool zero_x = false);
+                bool zero_x = false, bool galerkin_start = false);
   void read_solve_checks();
   void write_iterations(int tensor, const std::vector<int>& iterations);
 
