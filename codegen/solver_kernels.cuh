@@ -541,9 +541,9 @@ struct CornerElement {
 // around newmark_init's x0. The sums of D^T A D and D^T (b - A x0) are split as delta's are:
 // a_k (d_i . K_e d_j) and -a_k (x0 . K_e d_j) per cell corner (at the corner's node), the
 // node terms d_i . (a_m m + C) d_j and d_j . (b - (a_m m + C) x0) per free node. K_e of a
-// translation (directions 2 to 4) is zero (the element's energy does not change under a
-// rigid shift), so those are applied to the element only in warps with a cell that has a
-// fixed corner, where the direction is zeroed.
+// translation (the directions from ops::kFirstStartTranslation on) is zero (the element's
+// energy does not change under a rigid shift), so those are applied to the element only in
+// warps with a cell that has a fixed corner, where the direction is zeroed.
 
 // The directions at a node, zero on fixed nodes. A fragment passes them, or nullptr (NoStart)
 // where the op has a guess. A forward grid kernel also runs the adjoint solves, which start
@@ -564,7 +564,6 @@ struct StartDirections {
 using NoStart = decltype(nullptr);
 constexpr int kStartDirections = ops::kStartDirections;
 constexpr int kStartSums = ops::kStartSums<kStartDirections>;
-constexpr int kElementDirections = 2;  // the directions K_e does not annihilate where none is fixed
 
 template <class R>
 __device__ __forceinline__ double dot_double(Vec3<R> a, Vec3<R> b) {
@@ -591,7 +590,7 @@ __device__ __forceinline__ void start_shares(const StartDirections<R>& dirs, int
     const bool near_fixed = __any_sync(0xffffffffu, valid && !free);
 #pragma unroll
     for (int j = 0; j < kStartDirections; ++j) {
-      if (j >= kElementDirections && !near_fixed) break;  // warp-uniform
+      if (j >= ops::kFirstStartTranslation && !near_fixed) break;  // warp-uniform
       const Vec3<R> y = element.apply(h, dirs.at(j, m, !free));
       if (!free) continue;
 #pragma unroll

@@ -26,53 +26,57 @@ SSC_HD constexpr int start_rhs_index(int j) {
 template <int K>
 constexpr int kStartSums = K * (K + 1) / 2 + K;
 
+// Every loop over the K directions unrolled on the GPU: the small arrays stay in registers
+// (the solve runs in every thread of a grid solve, on its critical path).
+#if defined(__CUDACC__) || defined(__CUDACC_RTC__)
+#define SSC_START_UNROLL _Pragma("unroll")
+#else
+#define SSC_START_UNROLL
+#endif
+
 // The coefficients a from the sums. Each direction is scaled to unit A-norm (their sizes
 // differ by orders of magnitude), then a Cholesky factorisation of the scaled Gram matrix
 // drops a direction whose pivot (the squared A-norm of its part A-orthogonal to the kept
 // directions before it) is at most `cut`: it adds nothing the others do not, up to the
-// rounding of the sums.
+// rounding of the sums. A dropped direction has inv_pivot 0, so its column of the factor,
+// its entry of the solution and its coefficient are 0.
 template <int K>
-SSC_HD inline void galerkin_coefficients(const double* sums, double cut, double* a) {
-  double scale[K], l[K][K], y[K];
-  bool keep[K];
+SSC_HD inline void galerkin_coefficients(const double (&sums)[kStartSums<K>], double cut, double (&a)[K]) {
+  double scale[K], l[K][K], inv_root[K], y[K];
+  SSC_START_UNROLL
   for (int j = 0; j < K; ++j) {
     const double g = sums[gram_index<K>(j, j)];
     scale[j] = g > 0 ? 1 / sqrt(g) : 0;
   }
-  auto scaled = [&](int i, int j) {
-    return scale[i] * scale[j] * (i <= j ? sums[gram_index<K>(i, j)] : sums[gram_index<K>(j, i)]);
-  };
+  SSC_START_UNROLL
   for (int j = 0; j < K; ++j) {
-    keep[j] = scale[j] > 0;
-    for (int i = 0; i < K; ++i) l[i][j] = 0;
-    if (!keep[j]) continue;
-    double pivot = scaled(j, j);
+    double pivot = scale[j] * scale[j] * sums[gram_index<K>(j, j)];
+    SSC_START_UNROLL
     for (int p = 0; p < j; ++p) pivot -= l[j][p] * l[j][p];
-    if (!(pivot > cut)) {
-      keep[j] = false;
-      continue;
-    }
-    l[j][j] = sqrt(pivot);
+    inv_root[j] = scale[j] > 0 && pivot > cut ? 1 / sqrt(pivot) : 0;
+    SSC_START_UNROLL
     for (int i = j + 1; i < K; ++i) {
-      double s = scaled(i, j);
+      double s = scale[i] * scale[j] * sums[gram_index<K>(j, i)];
+      SSC_START_UNROLL
       for (int p = 0; p < j; ++p) s -= l[i][p] * l[j][p];
-      l[i][j] = s / l[j][j];
+      l[i][j] = s * inv_root[j];
     }
   }
-  for (int i = 0; i < K; ++i) {  // L y = scaled rhs
-    y[i] = 0;
-    if (!keep[i]) continue;
+  SSC_START_UNROLL
+  for (int i = 0; i < K; ++i) {  // L y = the scaled right-hand side
     double s = scale[i] * sums[start_rhs_index<K>(i)];
+    SSC_START_UNROLL
     for (int p = 0; p < i; ++p) s -= l[i][p] * y[p];
-    y[i] = s / l[i][i];
+    y[i] = s * inv_root[i];
   }
-  for (int i = K - 1; i >= 0; --i) {  // L^T z = y; a = scale z
-    a[i] = 0;
-    if (!keep[i]) continue;
+  SSC_START_UNROLL
+  for (int i = K - 1; i >= 0; --i) {  // L^T z = y, a = scale z
     double s = y[i];
+    SSC_START_UNROLL
     for (int p = i + 1; p < K; ++p) s -= l[p][i] * a[p];
-    a[i] = s / l[i][i];
+    a[i] = s * inv_root[i];
   }
+  SSC_START_UNROLL
   for (int i = 0; i < K; ++i) a[i] *= scale[i];
 }
 

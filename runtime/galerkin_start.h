@@ -11,16 +11,18 @@
 
 namespace ssc {
 
-// apply(p, q): q = A p. x holds x0 on entry and the start on return.
-template <int K, class Real, class Apply>
-void galerkin_start(long n, Apply&& apply, const Real* b, const std::array<std::vector<Real>, K>& directions, Real* x) {
+// apply(p, q): q = A p; product(j, q): q = A d_j (where the caller knows a cheaper way).
+// x holds x0 on entry and the start on return.
+template <int K, class Real, class Apply, class Product>
+void galerkin_start(long n, Apply&& apply, Product&& product, const Real* b,
+                    const std::array<std::vector<Real>, K>& directions, Real* x) {
   std::vector<Real> r(n), ad(n);
   apply(x, r.data());
 #pragma omp parallel for schedule(static) if (n >= kParallelThreshold)
   for (long i = 0; i < n; ++i) r[i] = b[i] - r[i];
   double sums[ops::kStartSums<K>], a[K];
   for (int j = 0; j < K; ++j) {
-    apply(directions[j].data(), ad.data());
+    product(j, ad.data());
     for (int i = 0; i <= j; ++i) sums[ops::gram_index<K>(i, j)] = deterministic_dot(directions[i].data(), ad.data(), n);
     sums[ops::start_rhs_index<K>(j)] = deterministic_dot(directions[j].data(), r.data(), n);
   }

@@ -202,8 +202,15 @@ void newmark_forward(Interpreter<Real>& in, const OpNode& op, int b) {
                                           : ops::newmark_start_direction(j, system.c.dt, v_prev, v_before, int(i));
     }
     std::vector<Real> corner(24 * size_t(g.cell_count));
-    galerkin_start<ops::kStartDirections, Real>(
-        n, [&](const Real* p, Real* q) { system.apply(p, q, corner); }, a.value("rhs"), d, u);
+    auto apply = [&](const Real* p, Real* q) { system.apply(p, q, corner); };
+    bool any_fixed = false;
+    for (int i = 0; i < g.node_count; ++i) any_fixed = any_fixed || system.is_fixed(i);
+    // Zeroed on fixed nodes, the translations are no longer in K's null space.
+    auto product = [&](int j, Real* q) {
+      if (j < ops::kFirstStartTranslation || any_fixed) return apply(d[j].data(), q);
+      for (int i = 0; i < g.node_count; ++i) store3(q, i, system.node_apply(i, load3(d[j].data(), i), zero3<Real>()));
+    };
+    galerkin_start<ops::kStartDirections, Real>(n, apply, product, a.value("rhs"), d, u);
   }
   const SolverOptions& o = in.options();
   if (b == 0)

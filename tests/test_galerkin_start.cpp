@@ -22,6 +22,11 @@ void apply(const double* p, double* q) {
   for (long i = 0; i < kN; ++i) q[i] = 3 * p[i] - (i > 0 ? p[i - 1] : 0) - (i + 1 < kN ? p[i + 1] : 0);
 }
 
+template <size_t K>
+auto products(const std::array<std::vector<double>, K>& d) {
+  return [&d](int j, double* q) { apply(d[j].data(), q); };
+}
+
 double a_norm_error(const std::vector<double>& x, const std::vector<double>& solution) {
   std::vector<double> e(kN), ae(kN);
   for (long i = 0; i < kN; ++i) e[i] = x[i] - solution[i];
@@ -55,7 +60,7 @@ struct Problem {
 TEST(GalerkinStart, ItsResidualIsOrthogonalToTheDirectionsAndItsErrorTheSmallest) {
   const Problem p;
   std::vector<double> x = p.x0;
-  galerkin_start<3, double>(kN, apply, p.b.data(), p.d, x.data());
+  galerkin_start<3, double>(kN, apply, products(p.d), p.b.data(), p.d, x.data());
   std::vector<double> ax(kN);
   apply(x.data(), ax.data());
   for (const auto& dj : p.d) {
@@ -79,7 +84,7 @@ TEST(GalerkinStart, ItsResidualIsOrthogonalToTheDirectionsAndItsErrorTheSmallest
 TEST(GalerkinStart, DirectionsThatAddNothingChangeNothing) {
   const Problem p;
   std::vector<double> x = p.x0;
-  galerkin_start<3, double>(kN, apply, p.b.data(), p.d, x.data());
+  galerkin_start<3, double>(kN, apply, products(p.d), p.b.data(), p.d, x.data());
   std::array<std::vector<double>, 6> more{p.d[0], p.d[1], p.d[2], std::vector<double>(kN, 0.0),
                                           std::vector<double>(kN), std::vector<double>(kN)};
   for (long i = 0; i < kN; ++i) {
@@ -87,10 +92,11 @@ TEST(GalerkinStart, DirectionsThatAddNothingChangeNothing) {
     more[5][i] = 1e-10 * p.d[2][i];
   }
   std::vector<double> y = p.x0;
-  galerkin_start<6, double>(kN, apply, p.b.data(), more, y.data());
+  galerkin_start<6, double>(kN, apply, products(more), p.b.data(), more, y.data());
   for (long i = 0; i < kN; ++i) EXPECT_NEAR(y[i], x[i], 1e-10 * (1 + std::abs(x[i])));
   std::vector<double> z = p.x0;
-  galerkin_start<1, double>(kN, apply, p.b.data(), {std::vector<double>(kN, 0.0)}, z.data());
+  const std::array<std::vector<double>, 1> zero{std::vector<double>(kN, 0.0)};
+  galerkin_start<1, double>(kN, apply, products(zero), p.b.data(), zero, z.data());
   EXPECT_EQ(z, p.x0);
 }
 

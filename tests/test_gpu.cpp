@@ -416,10 +416,14 @@ TEST(GpuAdjoint, DoubleStepMatchesInterpreter) {
   adjoint_vs_interpreter("double", 1e-10);
 }
 
+// Float against the double interpreter: the worst cotangent is stiffness_damping's w^T K u,
+// which cancels. On an H200 it differed by 8.5e-4 with the time-step solve started from
+// newmark_start and by 1.1e-3 from the Galerkin start (ops/galerkin_start.h): float's u
+// along another CG path, both within the solve's tolerance; double agrees to 1.6e-12.
 TEST(GpuAdjoint, FloatStepMatchesInterpreter) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
-  adjoint_vs_interpreter("float", 1e-3);
+  adjoint_vs_interpreter("float", 2e-3);
 }
 
 // The extension's two grid solves (one phase per iteration for latency, two for
@@ -453,7 +457,7 @@ TEST(GpuForward, OneAndTwoPhaseTimeStepSolvesMatchTheInterpreter) {
     gpu_vs_interpreter("double", 1e-10, go);
     gpu_vs_interpreter("float", 1e-4, go);
     adjoint_vs_interpreter("double", 1e-10, go);
-    adjoint_vs_interpreter("float", 1e-3, go);
+    adjoint_vs_interpreter("float", 2e-3, go);  // as FloatStepMatchesInterpreter
   }
 }
 
