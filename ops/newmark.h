@@ -211,7 +211,7 @@ SSC_HD inline Real newmark_start(Real dt, Real theta, const Real* u_prev, const 
 // The solve then starts at the best point (ops/galerkin_start.h) of u- + the span of
 // kStartDirections directions, which holds newmark_start: dt v-, dt (v- - v_before) (zero
 // without v_before) and the three translations. Component k of direction j, before the
-// caller zeroes it on fixed nodes. On the paper's dragon 74.0 -> 62.9 CG iterations a step.
+// caller zeroes it on fixed nodes. On the peer dragon 74.0 -> 62.8 CG iterations a step.
 constexpr int kStartDirections = 5;
 constexpr int kFirstStartTranslation = 2;  // K has the translations in its null space: no element apply
 template <class Real>

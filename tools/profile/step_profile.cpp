@@ -1,7 +1,8 @@
 // Where the CPU step of a scene goes: its forward steps timed whole (wall and process CPU
 // time per step, best of three 40-step runs from the start) and op by op (after each step,
 // every op run once more through Interpreter::run_op on that step's inputs), with the time-step
-// solve's CG iterations. Batch 1, the interpreter in double; threads as OMP_NUM_THREADS says.
+// solve's CG iterations (their average and step by step). Batch 1, the interpreter in double;
+// threads as OMP_NUM_THREADS says.
 // Usage: ssc_step_profile SCENE [STEPS]   (docs/benchmarks.md, issue 27's CPU step)
 #include <chrono>
 #include <cstdio>
@@ -36,13 +37,15 @@ int main(int argc, char** argv) {
   Simulation sim(scene, grid, 1, false);
   double best_wall = 1e300, best_cpu = 1e300;
   long iterations = 0;
+  std::vector<int> by_step(steps);
   for (int run = 0; run < 3; ++run) {
     sim.reset();
     iterations = 0;
     const double w0 = wall_ms(), c0 = cpu_ms();
     for (int s = 0; s < steps; ++s) {
       sim.step();
-      iterations += sim.last_report().cg_iterations[0];
+      by_step[s] = sim.last_report().cg_iterations[0];
+      iterations += by_step[s];
     }
     best_wall = std::min(best_wall, (wall_ms() - w0) / steps);
     best_cpu = std::min(best_cpu, (cpu_ms() - c0) / steps);
@@ -50,6 +53,9 @@ int main(int argc, char** argv) {
   std::printf("%d cells, %d nodes; per step (best of 3 runs of %d steps): wall %.2f ms, CPU %.2f ms; %.2f CG "
               "iterations a step\n",
               grid.cell_count, grid.node_count, steps, best_wall, best_cpu, double(iterations) / steps);
+  std::printf("CG iterations by step:");
+  for (int n : by_step) std::printf(" %d", n);
+  std::printf("\n");
   Interpreter<double>& in = sim.interpreter();
   const auto& ops = sim.timestep_graph().graph.ops();
   std::vector<double> op_cpu(ops.size(), 0.0);
