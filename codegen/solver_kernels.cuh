@@ -76,12 +76,12 @@ __device__ __forceinline__ void newmark_diagonal_corner(int i, R h, const R* rot
 }
 
 // Node i: the Jacobi diagonal from the corner diagonals, the masked right-hand side, and
-// x = 0 on fixed nodes (everywhere when zero_x).
+// x's start (ops::NewmarkXStart; 0 on fixed nodes).
 template <class R, class Damping>
 __device__ __forceinline__ void newmark_setup(int i, const ops::NewmarkCoefficients<R>& c, const R* mass,
                                               const R* fixed, Damping damping, const R* corner,
                                               const int* node_cell_offset, const int* node_cell_entry, const R* rhs,
-                                              int zero_x, R* x, R* b, R* inv_diag) {
+                                              int x_start, R* x, R* x_before, R* b, R* inv_diag) {
   const Vec3<R> kd = ops::gather_corner_sum(corner, node_cell_offset, node_cell_entry, i);
   Vec3<R> d = ops::newmark_system_apply(c, mass[i], make_vec3(R(1), R(1), R(1)), kd);
   add_damping_diagonal(d, damping, i);
@@ -89,7 +89,13 @@ __device__ __forceinline__ void newmark_setup(int i, const ops::NewmarkCoefficie
   for (int k = 0; k < 3; ++k) {
     inv_diag[3 * i + k] = is_fixed ? R(1) : R(1) / d[k];
     b[3 * i + k] = is_fixed ? R(0) : rhs[3 * i + k];
-    if (is_fixed || zero_x) x[3 * i + k] = R(0);
+    if (x_start == ops::kWarmChainX) {
+      const R later = x[3 * i + k], before = x_before[3 * i + k];
+      x_before[3 * i + k] = later;
+      x[3 * i + k] = is_fixed || isnan(later) ? R(0) : isnan(before) ? later : later + (later - before);
+    } else if (is_fixed || x_start == ops::kZeroX) {
+      x[3 * i + k] = R(0);
+    }
   }
 }
 
@@ -667,19 +673,20 @@ __device__ __forceinline__ void newmark_start_item(int i, const ops::NewmarkCoef
 
 // A grid solve's setup (newmark_diag and newmark_setup of the host-driven sequence): the
 // corners of the stiffness diagonal, a grid barrier, per node the Jacobi diagonal, the
-// masked right-hand side and x = 0 on fixed nodes (everywhere with zero_x), a grid barrier.
+// masked right-hand side and x's start (ops::NewmarkXStart), a grid barrier.
 template <class R, class Damping>
 __device__ __forceinline__ void newmark_grid_setup(GridPcg<R>& g, const ops::NewmarkCoefficients<R>& c, int n_cell,
                                                    int n_node, R h, const R* rotation, const R* cell_weights,
                                                    const int*, const R* lambda, const R* mu, const R* mass,
                                                    const R* fixed, Damping damping, const int* node_cell_offset,
-                                                   const int* node_cell_entry, const R* rhs, int zero_x, R* b,
-                                                   R* inv_diag, R* corner) {
+                                                   const int* node_cell_entry, const R* rhs, int x_start,
+                                                   R* x_before, R* b, R* inv_diag, R* corner) {
   for (int t = g.rank; t < 8 * n_cell; t += g.threads)
     newmark_diagonal_corner(t, h, rotation, cell_weights, lambda, mu, corner);
   grid_sync(g.bar);
   for (int n = g.rank; n < n_node; n += g.threads)
-    newmark_setup(n, c, mass, fixed, damping, corner, node_cell_offset, node_cell_entry, rhs, zero_x, g.x, b, inv_diag);
+    newmark_setup(n, c, mass, fixed, damping, corner, node_cell_offset, node_cell_entry, rhs, x_start, g.x, x_before, b,
+                  inv_diag);
   grid_sync(g.bar);
 }
 

@@ -131,13 +131,13 @@ Snippet newmark_grid(const Graph& g, int op, bool adjoint, const std::string& fo
     b.scratch("corner2", "corner2", "Real", Domain::Cell, 24, true, true);
     b.vec("r2", true, "3 * n_node", true).vec("s2", true, "3 * n_node", true);
   }
-  b.vec("rhs", false, "3 * n_node").value("zero_x", "int");
+  b.vec("rhs", false, "3 * n_node").vec("x_before", true, "3 * n_node").value("x_start", "int");
   grid_solve_params(b, "3 * n_node", barrier, true);
   b.stage(stage, true);
   const std::string args = "c, n_cell, n_node, h, $rotation, g_cell_weights, g_cell_nodes, $lambda, $mu, $mass, $fixed, " +
                            damping + ", g_node_cell_offset, g_node_cell_entry";
   return b.code(std::string(kCoefficients) + grid_state() + "gen::newmark_grid_setup<Real>(pcg, " + args +
-                ", v_rhs, zero_x, v_b, v_inv_diag, $corner);\n" + "gen::" + form + "<Real>(pcg, " + args +
+                ", v_rhs, x_start, v_x_before, v_b, v_inv_diag, $corner);\n" + "gen::" + form + "<Real>(pcg, " + args +
                 (one_phase ? ", $corner, $corner2, v_r2, v_s2, " : ", $corner, ") + start + ");\n");
 }
 
@@ -187,11 +187,12 @@ std::vector<Snippet> newmark_solver(const Graph& g, int op, bool adjoint) {
     const std::string damping = bind_damping(g, op, b);
     newmark_scalars(b).t("mass").t("fixed").grid("node_cell_offset", "int").grid("node_cell_entry", "int");
     b.scratch("corner", "corner", "Real", Domain::Cell, 24, false, true);
-    b.vec("rhs", false, x3).vec("x", true, x3).vec("b", true, x3).vec("inv_diag", true, x3).value("zero_x", "int");
+    b.vec("rhs", false, x3).vec("x", true, x3).vec("x_before", true, x3).vec("b", true, x3).vec("inv_diag", true, x3);
+    b.value("x_start", "int");
     b.stage("node gather of the diagonal, masked right-hand side", true);
     s.push_back(b.code(std::string(kCoefficients) + "gen::newmark_setup<Real>(i, c, $mass, $fixed, " + damping +
                        ", $corner, g_node_cell_offset, g_node_cell_entry, v_rhs,\n"
-                       "                         zero_x, v_x, v_b, v_inv_diag);\n"));
+                       "                         x_start, v_x, v_x_before, v_b, v_inv_diag);\n"));
   }
   if (!adjoint && !g.ops().at(op).bound("guess")) {
     Builder b(g, op, "newmark_start", Extent::Item);

@@ -208,6 +208,13 @@ SSC_HD inline Real newmark_start(Real dt, Real theta, const Real* u_prev, const 
   return v_before ? u + theta * dt * (v_prev[k] - v_before[k]) : u;
 }
 
+// How a time-step solve's x starts on the GPU (the value x_start of its setup, codegen's
+// newmark_setup): as it is (the forward's initial guess, newmark_init), at 0, or continuing the
+// adjoint solves' warm chain (runtime/solvers.cpp, newmark_adjoint): x holds the later step's
+// solution and x_before the one before it, NaN where there is none yet, and the start is
+// x + (x - x_before), x or 0.
+enum NewmarkXStart : int { kKeepX = 0, kZeroX = 1, kWarmChainX = 2 };
+
 // The solve then starts at the best point (ops/galerkin_start.h) of u- + the span of
 // kStartDirections directions, which holds newmark_start: dt v-, dt (v- - v_before) (zero
 // without v_before) and the three translations. Component k of direction j, before the

@@ -219,6 +219,9 @@ void GpuTimestep::Impl::allocate_scratch(const std::vector<PlannedKernel>& kerne
   for (const char* v : {"v_r", "v_z", "v_p", "v_q", "v_b", "v_inv_diag", "v_w", "v_s", "v_r2", "v_w2", "v_s2"})
     need[v] = size_t(batch) * len_max * real_size;
   need["v_iterations_sink"] = size_t(batch) * real_size;  // iteration counts nobody reads on the device
+  for (size_t o = 0; o < graph.ops().size(); ++o)  // the adjoint solves' warm chain (clear_warm_starts)
+    if (graph.ops()[o].spec->solver == "newmark_pcg")
+      need[fmt::format("s_w_before_op{}", o)] = size_t(batch) * 3 * size_t(sizes.node) * real_size;
   for (auto& [n, bytes] : need) {
     auto it = scratch.find(n);
     if (it != scratch.end() && it->second.bytes >= bytes) continue;
@@ -381,6 +384,7 @@ void GpuTimestep::Impl::ensure_adjoint() {
   for (const PlannedKernel& k : plan.adjoint) adjoint.push_back(&k);
   compile_and_load(adjoint);
   allocate_scratch(plan.adjoint);
+  clear_warm_starts();  // zero-filled by alloc, which would read as solutions
   // Inputs first, each view 256-byte aligned.
   const size_t n = graph.tensors().size();
   std::vector<size_t> offset(n);
@@ -648,7 +652,8 @@ std::vector<int> GpuTimestep::Impl::pcg(cu::DevicePtr x, long len, double tol, i
 // `iterations` receives the iteration count per batch item on the device.
 void GpuTimestep::Impl::grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it,
                                  cu::DevicePtr iterations, const char* what, std::vector<int>* iterations_out,
-                                 int reference_mode, cu::DevicePtr rhs, bool zero_x, bool galerkin_start) {
+                                 int reference_mode, cu::DevicePtr rhs, int x_start, cu::DevicePtr x_before,
+                                 bool galerkin_start) {
   const int slot = int(solve_checks.size());
   if (slot >= kMaxSolveLog) throw std::logic_error("gpu: more grid solves in one step than s_cg_log holds");
   Call c;
@@ -657,12 +662,13 @@ void GpuTimestep::Impl::grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long w
               {"max_it", double(max_it)},
               {"log_slot", double(slot)},
               {"reference_mode", double(reference_mode)},
-              {"zero_x", zero_x ? 1.0 : 0.0},  // a Newmark grid solve's setup (the extension's has none)
+              {"x_start", double(x_start)},  // a Newmark grid solve's setup (the extension's has none)
               {"galerkin_start", galerkin_start ? 1.0 : 0.0}};  // a forward time-step solve's start
   for (const char* v : {"v_b", "v_inv_diag", "v_r", "v_w", "v_s", "v_z", "v_p", "v_r2", "v_w2", "v_s2"})
     c.vectors[v] = scratch.at(v).ptr;
   c.vectors["v_x"] = x;
   c.vectors["v_rhs"] = rhs;
+  c.vectors["v_x_before"] = x_before;
   c.vectors["v_iterations"] = iterations;
   launch(k, c);
   solve_checks.push_back({slot, what, tol, iterations_out, reference_mode != 0});

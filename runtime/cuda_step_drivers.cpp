@@ -55,14 +55,18 @@ GpuTimestep::Impl::Apply GpuTimestep::Impl::extension_apply() {
 }
 
 // Jacobi diagonal and the masked right-hand side of op o's time-step system into v_inv_diag
-// and v_b; x is zeroed on fixed nodes (everywhere with zero_x).
-void GpuTimestep::Impl::newmark_setup(int o, cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x) {
+// and v_b; x's start as x_start says (ops::NewmarkXStart).
+void GpuTimestep::Impl::newmark_setup(int o, cu::DevicePtr rhs, cu::DevicePtr x, int x_start) {
   Call diag;
   diag.len = 8L * sizes.cell;
   launch(kernel("newmark_diag", false, o), diag);
   Call setup;
-  setup.vectors = {{"v_rhs", rhs}, {"v_x", x}, {"v_b", scratch.at("v_b").ptr}, {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
-  setup.values = {{"zero_x", zero_x ? 1 : 0}};
+  setup.vectors = {{"v_rhs", rhs},
+                   {"v_x", x},
+                   {"v_x_before", scratch.at(scratch_of("w_before", o)).ptr},
+                   {"v_b", scratch.at("v_b").ptr},
+                   {"v_inv_diag", scratch.at("v_inv_diag").ptr}};
+  setup.values = {{"x_start", x_start}};
   launch(kernel("newmark_setup", false, o), setup);
 }
 
@@ -75,10 +79,10 @@ void GpuTimestep::Impl::newmark(int o) {
   if (grid_solves) {  // the grid kernel runs its setup itself
     grid_pcg(kernel(newmark_grid, false, o), u, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
              solver.cg_max_iterations, tensors.at(op.output("cg_iterations")).ptr, "time-step solve", &cg_iterations,
-             0, rhs, false, start);
+             0, rhs, ops::kKeepX, scratch.at(scratch_of("w_before", o)).ptr, start);
     return;
   }
-  newmark_setup(o, rhs, u, false);
+  newmark_setup(o, rhs, u, ops::kKeepX);
   if (start) {  // the Galerkin start (ops/galerkin_start.h)
     Call start;
     start.vectors = {{"v_b", scratch.at("v_b").ptr}, {"v_x", u}};
@@ -153,29 +157,32 @@ void GpuTimestep::Impl::adjoint_newmark(int o) {
   const OpNode& op = graph.ops()[o];
   const cu::DevicePtr w = scratch.at(scratch_of("w", o)).ptr;
   // The residual's reference, the largest cotangent of the step's adjoint time-step solves,
-  // and the first solve's warm start, its solution at the later step (runtime/solvers.cpp,
-  // newmark_adjoint; clear_warm_starts zeroes it for a new backward pass).
+  // and the first solve's warm start, extrapolated from its solutions at the two later steps
+  // (runtime/solvers.cpp, newmark_adjoint; clear_warm_starts marks them absent for a new
+  // backward pass).
   const int reference_mode = adjoint_reference_set ? 2 : 1;
   adjoint_reference_set = true;
   const cu::DevicePtr rhs = adjoints.at(op.output("u")).ptr;
-  const bool zero_x = !(reference_mode == 1 && warm_adjoint_solves);
+  const int x_start = reference_mode == 1 && warm_adjoint_solves ? ops::kWarmChainX : ops::kZeroX;
   if (grid_solves) {  // the grid kernel runs its setup itself
     grid_pcg(kernel(newmark_grid, false, o), w, std::max(8L * sizes.cell, long(sizes.node)), solver.cg_tolerance,
              solver.cg_max_iterations, scratch.at("v_iterations_sink").ptr, "adjoint time-step solve",
-             &adjoint_cg_iterations, reference_mode, rhs, zero_x);
+             &adjoint_cg_iterations, reference_mode, rhs, x_start, scratch.at(scratch_of("w_before", o)).ptr);
     return;
   }
-  newmark_setup(o, rhs, w, zero_x);
+  newmark_setup(o, rhs, w, x_start);
   const std::vector<int> its = pcg(w, 3L * sizes.node, solver.cg_tolerance, solver.cg_max_iterations, newmark_apply(o),
                                    "adjoint time-step solve", fmt::format("adjoint newmark {}", o), reference_mode);
   for (int k = 0; k < batch; ++k) adjoint_cg_iterations[k] += its[k];
 }
 
+// The adjoint solves' warm chain: no later solutions (NaN: every byte 0xff, in float and double).
 void GpuTimestep::Impl::clear_warm_starts() {
   for (size_t o = 0; o < graph.ops().size(); ++o)
     if (graph.ops()[o].spec->solver == "newmark_pcg")
-      if (const auto w = scratch.find(scratch_of("w", int(o))); w != scratch.end())
-        cu::check(d->MemsetD8(w->second.ptr, 0, w->second.bytes), "clear warm starts");
+      for (const char* key : {"w", "w_before"})
+        if (const auto w = scratch.find(scratch_of(key, int(o))); w != scratch.end())
+          cu::check(d->MemsetD8(w->second.ptr, 0xff, w->second.bytes), "clear warm starts");
 }
 
 void GpuTimestep::Impl::adjoint_extension(int o) {

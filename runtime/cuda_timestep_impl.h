@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "codegen/kernel_plan.h"
+#include "ops/newmark.h"
 #include "runtime/band_operator.h"
 #include "runtime/cuda_driver.h"
 #include "runtime/cuda_runtime.h"
@@ -164,11 +165,12 @@ struct GpuTimestep::Impl {
   long wanted_blocks(long work) const;
   void decide_grid_min_blocks();
   // iterations_out: assigned the solve's iterations per item, or added to with reference_mode != 0
-  // (the step's adjoint time-step solves, summed). rhs and zero_x: a Newmark grid solve's setup
-  // (its right-hand side; x = 0 everywhere first).
+  // (the step's adjoint time-step solves, summed). rhs, x_start and x_before: a Newmark grid
+  // solve's setup (its right-hand side; how x starts, ops::NewmarkXStart; the warm chain's
+  // earlier solution); galerkin_start: a forward time-step solve's start (ops/galerkin_start.h).
   void grid_pcg(const PlannedKernel& k, cu::DevicePtr x, long work, double tol, int max_it, cu::DevicePtr iterations,
                 const char* what, std::vector<int>* iterations_out, int reference_mode, cu::DevicePtr rhs = 0,
-                bool zero_x = false, bool galerkin_start = false);
+                int x_start = ops::kKeepX, cu::DevicePtr x_before = 0, bool galerkin_start = false);
   void read_solve_checks();
   void write_iterations(int tensor, const std::vector<int>& iterations);
 
@@ -179,7 +181,7 @@ struct GpuTimestep::Impl {
                    const std::function<void(int)>& solve, const char* what);
   void solve_forward(int op);
   void solve_adjoint(int op);
-  void newmark_setup(int op, cu::DevicePtr rhs, cu::DevicePtr x, bool zero_x);
+  void newmark_setup(int op, cu::DevicePtr rhs, cu::DevicePtr x, int x_start);
   void newmark(int op);
   void clear_warm_starts();
   std::vector<Buffer> runs(const std::vector<int>& tensors) const;  // of adjacent tensor buffers  // the adjoint time-step solves' warm starts, for a new backward pass

@@ -52,7 +52,7 @@ Interpreter<Real>::Interpreter(const Graph& graph, const StaticArrays& grid, int
     }
   }
   extension_adjoint_guess_.assign(batch, {});
-  newmark_adjoint_guess_.assign(batch, {});
+  newmark_adjoint_warm_start_.assign(batch, {});
 }
 
 template <class Real>
@@ -177,7 +177,7 @@ template <class Real>
 void Interpreter<Real>::clear_adjoints(bool including_inputs) {
   if (including_inputs) {  // a new backward pass
     extension_adjoint_guess_.assign(batch(), {});
-    newmark_adjoint_guess_.assign(batch(), {});
+    newmark_adjoint_warm_start_.assign(batch(), {});
   }
   for (size_t t = 0; t < graph_.tensors().size(); ++t)
     if (including_inputs || graph_.tensor(int(t)).role != TensorInfo::Role::Input)

@@ -89,9 +89,14 @@ class Interpreter {
     double reference = 0;
   };
   AdjointSolves& adjoint_solves(int b) { return adjoint_solves_[b]; }
-  // The first adjoint time-step solve's solution at the later step of this backward pass
-  // (empty at its start): that solve's warm start, in run_adjoint() only.
-  std::vector<Real>* newmark_adjoint_guess(int b) { return warm_adjoint_solves_ ? &newmark_adjoint_guess_[b] : nullptr; }
+  // The first adjoint time-step solve's solutions at the two later steps of this backward pass
+  // (empty until solved): that solve's warm start, in run_adjoint() only.
+  struct AdjointWarmStart {
+    std::vector<Real> later, before;
+  };
+  AdjointWarmStart* newmark_adjoint_warm_start(int b) {
+    return warm_adjoint_solves_ ? &newmark_adjoint_warm_start_[b] : nullptr;
+  }
   // A Real scratch buffer of op `op` for batch item b (a solver leaves its result there for
   // the op's adjoint parts).
   Real* scratch_real(int op, const std::string& key, int b) {
@@ -126,7 +131,7 @@ class Interpreter {
   std::vector<std::map<std::string, Scratch>> scratch_;  // per op, by key
   std::vector<std::vector<Real>> extension_adjoint_guess_;  // per batch item, warm start
   std::unique_ptr<BandFactorCache> band_factor_ = std::make_unique<BandFactorCache>();
-  std::vector<std::vector<Real>> newmark_adjoint_guess_;    // per batch item, warm start
+  std::vector<AdjointWarmStart> newmark_adjoint_warm_start_;  // per batch item
   std::vector<AdjointSolves> adjoint_solves_;               // per batch item
   bool warm_adjoint_solves_ = false;
 };

@@ -238,9 +238,10 @@ void newmark_forward(Interpreter<Real>& in, const OpNode& op, int b) {
 //   cotangents many orders smaller than the last one's (1e-8 to 1e-50 of it), and solving
 //   those to their own relative tolerance would cost as much as the last solve for nothing
 //   the gradient can hold; every solve of the step so reaches the same absolute accuracy.
-// - The step's first solve starts from its solution at the later step of the backward pass
-//   (the cotangents change little from step to step); the others from 0, which is already
-//   within tolerance when their cotangent is that small.
+// - The step's first solve starts from its solutions at the two later steps of the backward
+//   pass, extrapolated: w + (w - w_before) (the cotangents change smoothly from step to step;
+//   with one later solution, that one); the others from 0, which is already within tolerance
+//   when their cotangent is that small. The GPU does the same (gen::newmark_setup).
 template <class Real>
 void newmark_adjoint(Interpreter<Real>& in, const OpNode& op, int b) {
   const Slots<Real> a{in, op, b};
@@ -249,16 +250,23 @@ void newmark_adjoint(Interpreter<Real>& in, const OpNode& op, int b) {
   const size_t n = 3 * size_t(in.grid().node_count);
   Real* w = in.scratch_real(o, "w", b);
   typename Interpreter<Real>::AdjointSolves& solves = in.adjoint_solves(b);
-  std::vector<Real>* guess = solves.count == 0 ? in.newmark_adjoint_guess(b) : nullptr;
-  if (guess && guess->size() == n)
-    std::copy(guess->begin(), guess->end(), w);
-  else
-    std::fill_n(w, n, Real(0));
+  typename Interpreter<Real>::AdjointWarmStart* warm = solves.count == 0 ? in.newmark_adjoint_warm_start(b) : nullptr;
+  const bool later = warm && warm->later.size() == n, before = later && warm->before.size() == n;
+  for (size_t i = 0; i < n; ++i)
+    w[i] = before  ? warm->later[i] + (warm->later[i] - warm->before[i])
+           : later ? warm->later[i]
+                   : Real(0);
   const SolverOptions& opt = in.options();
   const PcgResult r = system.solve(a.bar("u"), w, opt.cg_tolerance, opt.cg_max_iterations, solves.reference);
   solves.reference = std::max(solves.reference, r.rhs_norm);
   ++solves.count;
-  if (guess) guess->assign(w, w + n);
+  if (warm) {
+    if (later)
+      warm->before.swap(warm->later);
+    else
+      warm->before.clear();
+    warm->later.assign(w, w + n);
+  }
   in.mutable_report().adjoint_cg_iterations[b] += r.iterations;
   if (!r.converged)
     throw SimulationError(fmt::format("the adjoint time-step solve did not converge (batch item {}): relative "
