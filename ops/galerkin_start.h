@@ -38,7 +38,7 @@ constexpr int kStartSums = K * (K + 1) / 2 + K;
 // differ by orders of magnitude), then a Cholesky factorisation of the scaled Gram matrix
 // drops a direction whose pivot (the squared A-norm of its part A-orthogonal to the kept
 // directions before it) is at most `cut`: it adds nothing the others do not, up to the
-// rounding of the sums. A dropped direction has inv_pivot 0, so its column of the factor,
+// rounding of the sums. A dropped direction has inv_root 0, so its column of the factor,
 // its entry of the solution and its coefficient are 0.
 template <int K>
 SSC_HD inline void galerkin_coefficients(const double (&sums)[kStartSums<K>], double cut, double (&a)[K]) {

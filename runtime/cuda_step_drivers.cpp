@@ -7,8 +7,8 @@
 // one persistent grid kernel, whose outcomes the host reads after the step: newmark_pcg_grid
 // or its one-phase form for batch 1 (either computes its Jacobi diagonal and masked
 // right-hand side itself); extension_pcg_grid, or its two-phase form for large batches.
-// Without: newmark_diag, newmark_setup, newmark_start and the host-driven iteration kernels (element apply:
-// cell kernel, node gather).
+// Without: newmark_diag, newmark_setup, newmark_start and the host-driven iteration kernels
+// (element apply: cell kernel, node gather).
 // Where the extension is one dense product (runtime/band_operator.h), it is a single
 // kernel each way instead.
 // Adjoint (implicit-function adjoints, as runtime/interpreter_adjoint.cpp): the
