@@ -417,9 +417,9 @@ TEST(GpuAdjoint, DoubleStepMatchesInterpreter) {
 }
 
 // Float against the double interpreter: the worst cotangent is stiffness_damping's w^T K u,
-// which cancels. On an H200 it differed by 8.5e-4 with the time-step solve started from
-// newmark_start and by 1.1e-3 from the Galerkin start (ops/galerkin_start.h): float's u
-// along another CG path, both within the solve's tolerance; double agrees to 1.6e-12.
+// which cancels. On an H200 it differed by 1.1e-3 with the forward solves' Galerkin start
+// (ops/galerkin_start.h), 8.5e-4 in a build whose adjoint solves took that start too: float's
+// u and w along other CG paths, within the solves' tolerance. Double agrees within 4e-12.
 TEST(GpuAdjoint, FloatStepMatchesInterpreter) {
   SKIP_WITHOUT_GPU();
   test_cache_root();
