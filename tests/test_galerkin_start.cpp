@@ -1,9 +1,8 @@
 // The start of a solve at the best point of an affine space (ops/galerkin_start.h through
-// runtime/galerkin_start.h), on the
-// 1-D Laplacian plus identity: the residual of the start is orthogonal to every direction, its
-// A-norm error is the smallest over the space (no combination of the directions does better),
-// and directions that add nothing (zero, a multiple of another, sizes ten orders apart) change
-// nothing.
+// runtime/galerkin_start.h), on the 1-D Laplacian plus identity: the residual of the start is
+// orthogonal to every direction, its A-norm error is the smallest over the space (no
+// combination of the directions does better), and directions that add nothing (zero, a
+// multiple of another, sizes ten orders apart) change nothing.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
