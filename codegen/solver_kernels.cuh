@@ -393,11 +393,17 @@ __device__ __forceinline__ void add_pcg_sums(double (&acc)[N], Vec3<R> rn, Vec3<
   }
 }
 
+// a . b summed in double.
+template <class R>
+__device__ __forceinline__ double dot_double(Vec3<R> a, Vec3<R> b) {
+  return double(a.x) * double(b.x) + double(a.y) * double(b.y) + double(a.z) * double(b.z);
+}
+
 // delta's corner part a_k (corner force y . u) at one cell corner (the Newmark grid solves sum
 // delta = w.u over the corners and the node terms over the nodes).
 template <class R>
 __device__ __forceinline__ void add_corner_delta(double& delta, R a_k, Vec3<R> y, Vec3<R> u) {
-  delta += double(a_k) * (double(y.x) * double(u.x) + double(y.y) * double(u.y) + double(y.z) * double(u.z));
+  delta += double(a_k) * dot_double(y, u);
 }
 
 // The start's first half over the thread's own nodes (count of them in all), given
@@ -570,11 +576,6 @@ struct StartDirections {
 using NoStart = decltype(nullptr);
 constexpr int kStartDirections = ops::kStartDirections;
 constexpr int kStartSums = ops::kStartSums<kStartDirections>;
-
-template <class R>
-__device__ __forceinline__ double dot_double(Vec3<R> a, Vec3<R> b) {
-  return double(a.x) * double(b.x) + double(a.y) * double(b.y) + double(a.z) * double(b.z);
-}
 
 // The thread's shares of the sums: cell corners t = first, first + stride, ... (whole warps:
 // the element apply shuffles) and nodes n = first, first + stride, ...; x holds x0, b the
