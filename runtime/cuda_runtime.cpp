@@ -351,11 +351,15 @@ void GpuTimestep::Impl::decide_newmark_grid() {
 // an H100 (docs/benchmarks.md): the dragon at batch 32 (12x the multiprocessors) 1.30x faster
 // forward, 1.35x adjoint; at batch 1 the cap costs 11 %; the CalculiX cube at batch 16 (2.7x)
 // gained nothing, at batch 64 (11x) 6 %. With 128-thread blocks and this cap, batch 32 ran as
-// fast as before or faster (docs/benchmarks.md, session 33).
+// fast as before or faster (docs/benchmarks.md, session 33). In float, six blocks (at most 85
+// registers): the dragon at batch 32 1.66 ms a step against 1.93 with three; in double six
+// took 2.39 against 2.00 (one H200, docs/benchmarks.md, session 35).
 void GpuTimestep::Impl::decide_grid_min_blocks() {
   d->DeviceGetAttribute(&multiprocessors, cu::kAttrMultiprocessorCount, device);
   const long wanted = wanted_blocks(std::max({8L * sizes.cell, long(sizes.node), long(sizes.band)})) * batch;
-  grid_min_blocks = options.grid_min_blocks > 0 ? options.grid_min_blocks : wanted > 4L * multiprocessors ? 3 : 1;
+  const int throughput_blocks = real_size == 4 ? 6 : 3;
+  grid_min_blocks =
+      options.grid_min_blocks > 0 ? options.grid_min_blocks : wanted > 4L * multiprocessors ? throughput_blocks : 1;
   if (const char* e = std::getenv("SSC_GPU_GRID_MIN_BLOCKS")) grid_min_blocks = std::max(1, std::atoi(e));
 }
 
