@@ -124,31 +124,37 @@ __device__ inline void grid_sync(unsigned long long* bar) {
 // followed by a tree over the blocks. partial holds N * gridDim.x doubles; consecutive calls
 // must use different partial buffers unless a grid_sync separates them. Includes a grid_sync
 // (writes of any thread before it are visible to every thread after it).
-// Two block barriers, not block_sum's three and grid_sync's two more: warp 0 alone publishes
-// the block's total, arrives and polls (its lane 0 acquires, __syncwarp passes that on to the
-// warp), and loads every block's N totals at once before the trees. The shared arrays need no
-// barrier at the end: part is read before this call's second barrier and written again after
-// it; total is written again after the next call's first barrier, which every thread reaches
-// after reading this call's. An item of one block returns with its block tree's totals (the
-// block total plus zeros).
-template <int N>
-__device__ inline void grid_sum(double (&v)[N], double* partial, unsigned long long* bar) {
+// Warp 0 alone publishes the block's total, arrives and polls (its lane 0 acquires; the
+// block barrier after it passes that on), then loads every block's N totals at once.
+// between() runs on every thread once all blocks have arrived, on the other warps while warp 0
+// loads and sums the totals (warp 0 runs it after): it may load what other blocks wrote (the
+// next phase's inputs), beside warp 0's loads. The shared arrays need no barrier at the end: part is
+// read before this call's second barrier and written again after it; total is written again
+// after the next call's first barrier, which every thread reaches after reading this call's.
+// An item of one block returns with its block tree's totals (the block total plus zeros).
+struct NoWork {
+  __device__ __forceinline__ void operator()() const {}
+};
+template <int N, class Between = NoWork>
+__device__ inline void grid_sum(double (&v)[N], double* partial, unsigned long long* bar, Between between = {}) {
   __shared__ double part[N][SSC_GRID / 32];
   __shared__ double total[N];
   const int lane = threadIdx.x & 31, warp = threadIdx.x >> 5;
   double s[N];
   warp0_block_totals<N, SSC_GRID>(v, part, s);
-  if (warp == 0) {
-    if (gridDim.x > 1) {
-      if (lane == 0) {
+  const bool blocks = gridDim.x > 1;
+  if (warp == 0 && blocks && lane == 0) {
 #pragma unroll
-        for (int k = 0; k < N; ++k) partial[N * blockIdx.x + k] = s[k];
-        const unsigned long long blocks = gridDim.x;
-        const unsigned long long target = (add_release(bar, 1ull) / blocks + 1) * blocks;
-        while (load_acquire(bar) < target) {
-        }
-      }
-      __syncwarp();
+    for (int k = 0; k < N; ++k) partial[N * blockIdx.x + k] = s[k];
+    const unsigned long long count = gridDim.x;
+    const unsigned long long target = (add_release(bar, 1ull) / count + 1) * count;
+    while (load_acquire(bar) < target) {
+    }
+  }
+  __syncthreads();
+  if (warp != 0) between();
+  if (warp == 0) {
+    if (blocks) {
       constexpr int kMaxLoads = N <= 4 ? 8 : 1;  // blocks up to 256 loaded at once (small N); more in further rounds
 #pragma unroll
       for (int k = 0; k < N; ++k) s[k] = 0;
@@ -174,6 +180,7 @@ __device__ inline void grid_sum(double (&v)[N], double* partial, unsigned long l
     if (lane == 0)
 #pragma unroll
       for (int k = 0; k < N; ++k) total[k] = s[k];
+    between();
   }
   __syncthreads();
 #pragma unroll

@@ -370,9 +370,10 @@ struct GridPcg {
         reference_mode(reference_mode_), bar(reinterpret_cast<unsigned long long*>(barrier)), partial0(partial),
         partial1(partial + half), rank(grid_rank()), threads(grid_threads()) {}
 
-  template <int N>
-  __device__ __forceinline__ void sum(double (&v)[N]) {
-    grid_sum<N>(v, parity ? partial1 : partial0, bar);
+  // between: work for every thread once all blocks have arrived (grid_sum).
+  template <int N, class Between = NoWork>
+  __device__ __forceinline__ void sum(double (&v)[N], Between between = {}) {
+    grid_sum<N>(v, parity ? partial1 : partial0, bar, between);
     parity ^= 1;
   }
   // u_{k+1} at node m from the previous iteration's vectors in r_old, w_old, s_old.
@@ -467,10 +468,11 @@ __device__ __forceinline__ void grid_own_update(GridPcg<R>& g, int n, const R* r
 }
 
 // From the start's sums (start = {gamma, delta, |r|^2}, bb = |b|^2): the convergence test
-// of runtime/pcg.h, the loop (iteration(acc) adds the new sums into acc), the final state.
-template <class R, class Iteration>
+// of runtime/pcg.h, the loop (iteration(acc) adds the new sums into acc; between() runs inside
+// each iteration's grid sum, GridPcg::sum), the final state.
+template <class R, class Iteration, class Between = NoWork>
 __device__ __forceinline__ void grid_loop(GridPcg<R>& g, int count, const double (&start)[3], double bb,
-                                          Iteration iteration) {
+                                          Iteration iteration, Between between = {}) {
   const double b_norm = sqrt(bb) < (sizeof(R) == 4 ? 1e-20 : 1e-100) ? 0.0 : sqrt(bb);  // runtime/pcg.h
   // Every block reads the reference before rank 0 may overwrite it with the same maximum.
   const double scale = residual_scale(b_norm, g.reference, g.reference_mode);
@@ -494,7 +496,7 @@ __device__ __forceinline__ void grid_loop(GridPcg<R>& g, int count, const double
   while (active) {
     double acc[3] = {0, 0, 0};
     iteration(acc);
-    g.sum(acc);
+    g.sum(acc, between);
     const double gamma_next = acc[0];
     const double beta_next = gamma_next / gamma;
     alpha = gamma_next / (acc[1] - beta_next * gamma_next / alpha);
@@ -577,15 +579,36 @@ using NoStart = decltype(nullptr);
 constexpr int kStartDirections = ops::kStartDirections;
 constexpr int kStartSums = ops::kStartSums<kStartDirections>;
 
+// Free node n's terms of the sums: d_i . (a_m m + C) d_j and d_j . (b - (a_m m + C) x0).
+template <class R, class NodeSystem>
+__device__ __forceinline__ void add_start_node_shares(const StartDirections<R>& dirs, int n, const R* x, const R* b,
+                                                      NodeSystem node_system, double (&acc)[kStartSums]) {
+  const Vec3<R> rest = load3(b, n) - node_system(n, load3(x, n));
+#pragma unroll
+  for (int j = 0; j < kStartDirections; ++j) {
+    const Vec3<R> dj = dirs.at(j, n, false), mj = node_system(n, dj);
+#pragma unroll
+    for (int i = 0; i <= j; ++i) acc[ops::gram_index<kStartDirections>(i, j)] += dot_double(dirs.at(i, n, false), mj);
+    acc[ops::start_rhs_index<kStartDirections>(j)] += dot_double(dj, rest);
+  }
+}
+
+// Whether cell corner t is the first corner entry of its node m, which then takes the node's
+// share of the work (the one-phase solve spreads the nodes so over all its blocks).
+__device__ __forceinline__ bool owns_node(int t, int m, const int* node_cell_offset, const int* node_cell_entry) {
+  return node_cell_entry[node_cell_offset[m]] == t;
+}
+
 // The thread's shares of the sums: cell corners t = first, first + stride, ... (whole warps:
-// the element apply shuffles) and nodes n = first, first + stride, ...; x holds x0, b the
-// masked right-hand side. node_system(n, e) = (a_m m + C) e at free node n.
+// the element apply shuffles) and the nodes: n = first, first + stride, ..., or, given
+// node_cell_entry, each node at the corner that owns it (owns_node); x holds x0, b the masked
+// right-hand side. node_system(n, e) = (a_m m + C) e at free node n.
 template <class R, class NodeSystem>
 __device__ __forceinline__ void start_shares(const StartDirections<R>& dirs, int first, int stride, int n_cell,
                                              int n_node, R h, R a_k, const R* rotation, const R* cell_weights,
                                              const int* cell_nodes, const R* lambda, const R* mu, const R* fixed,
-                                             const R* x, const R* b, NodeSystem node_system,
-                                             double (&acc)[kStartSums]) {
+                                             const int* node_cell_offset, const int* node_cell_entry, const R* x,
+                                             const R* b, NodeSystem node_system, double (&acc)[kStartSums]) {
   for (int k = 0; k < kStartSums; ++k) acc[k] = 0;
   const int lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
   for (int t = first; t < lanes_warps; t += stride) {
@@ -605,57 +628,67 @@ __device__ __forceinline__ void start_shares(const StartDirections<R>& dirs, int
         add_corner_delta(acc[ops::gram_index<kStartDirections>(i, j)], a_k, y, dirs.at(i, m, false));
       add_corner_delta(acc[ops::start_rhs_index<kStartDirections>(j)], -a_k, y, x0);
     }
+    if (node_cell_entry && free && owns_node(t, m, node_cell_offset, node_cell_entry))
+      add_start_node_shares(dirs, m, x, b, node_system, acc);
   }
-  for (int n = first; n < n_node; n += stride) {
-    if (fixed[n] != R(0)) continue;
-    const Vec3<R> rest = load3(b, n) - node_system(n, load3(x, n));
+  if (node_cell_entry) return;
+  for (int n = first; n < n_node; n += stride)
+    if (fixed[n] == R(0)) add_start_node_shares(dirs, n, x, b, node_system, acc);
+}
+
+// x += D a at free node n.
+template <class R>
+__device__ __forceinline__ void start_move(const StartDirections<R>& dirs, int n, const double (&a)[kStartDirections],
+                                           R* x) {
+  for (int k = 0; k < 3; ++k) {
+    double s = double(x[3 * n + k]);
 #pragma unroll
-    for (int j = 0; j < kStartDirections; ++j) {
-      const Vec3<R> dj = dirs.at(j, n, false), mj = node_system(n, dj);
-#pragma unroll
-      for (int i = 0; i <= j; ++i)
-        acc[ops::gram_index<kStartDirections>(i, j)] += dot_double(dirs.at(i, n, false), mj);
-      acc[ops::start_rhs_index<kStartDirections>(j)] += dot_double(dj, rest);
-    }
+    for (int j = 0; j < kStartDirections; ++j)
+      s += a[j] * double(ops::newmark_start_direction(j, dirs.dt, dirs.v_prev, dirs.v_before, 3 * n + k));
+    x[3 * n + k] = R(s);
   }
 }
 
-// From the item's sums: x += D a at nodes n = first, first + stride, ...
+// From the item's sums: x += D a at the free nodes, spread as in start_shares.
 template <class R>
-__device__ __forceinline__ void start_moves(const StartDirections<R>& dirs, int first, int stride, int n_node,
-                                            const R* fixed, const double (&sums)[kStartSums], R* x) {
+__device__ __forceinline__ void start_moves(const StartDirections<R>& dirs, int first, int stride, int n_cell,
+                                            int n_node, const int* cell_nodes, const R* fixed,
+                                            const int* node_cell_offset, const int* node_cell_entry,
+                                            const double (&sums)[kStartSums], R* x) {
   double a[kStartDirections];
   ops::galerkin_coefficients<kStartDirections>(sums, ops::galerkin_cut<R>(), a);
-  for (int n = first; n < n_node; n += stride) {
-    if (fixed[n] != R(0)) continue;
-    for (int k = 0; k < 3; ++k) {
-      double s = double(x[3 * n + k]);
-#pragma unroll
-      for (int j = 0; j < kStartDirections; ++j)
-        s += a[j] * double(ops::newmark_start_direction(j, dirs.dt, dirs.v_prev, dirs.v_before, 3 * n + k));
-      x[3 * n + k] = R(s);
+  if (node_cell_entry) {
+    for (int t = first; t < 8 * n_cell; t += stride) {
+      const int m = cell_nodes[t];
+      if (fixed[m] == R(0) && owns_node(t, m, node_cell_offset, node_cell_entry)) start_move(dirs, m, a, x);
     }
+    return;
   }
+  for (int n = first; n < n_node; n += stride)
+    if (fixed[n] == R(0)) start_move(dirs, n, a, x);
 }
 
 // The start in a grid solve, after its setup: the shares, one grid sum, the moves at the own
-// nodes, a grid barrier. Nothing without a start.
+// nodes, a grid barrier. Nothing without a start. node_cell_entry: as in start_shares.
 template <class R, class NodeSystem>
 __device__ __forceinline__ void newmark_grid_start(GridPcg<R>& g, const StartDirections<R>& dirs, int n_cell,
                                                    int n_node, R h, R a_k, const R* rotation, const R* cell_weights,
                                                    const int* cell_nodes, const R* lambda, const R* mu,
-                                                   const R* fixed, NodeSystem node_system) {
+                                                   const R* fixed, const int* node_cell_offset,
+                                                   const int* node_cell_entry, NodeSystem node_system) {
   if (!dirs.active) return;
   double sums[kStartSums];
   start_shares(dirs, g.rank, g.threads, n_cell, n_node, h, a_k, rotation, cell_weights, cell_nodes, lambda, mu, fixed,
-               g.x, g.b, node_system, sums);
+               node_cell_offset, node_cell_entry, g.x, g.b, node_system, sums);
   g.sum(sums);
-  start_moves(dirs, g.rank, g.threads, n_node, fixed, sums, g.x);
+  start_moves(dirs, g.rank, g.threads, n_cell, n_node, cell_nodes, fixed, node_cell_offset, node_cell_entry, sums,
+              g.x);
   grid_sync(g.bar);
 }
 template <class R, class NodeSystem>
 __device__ __forceinline__ void newmark_grid_start(GridPcg<R>&, NoStart, int, int, R, R, const R*, const R*,
-                                                   const int*, const R*, const R*, const R*, NodeSystem) {}
+                                                   const int*, const R*, const R*, const R*, const int*, const int*,
+                                                   NodeSystem) {}
 
 // The start in the host-driven sequence (after newmark_setup): one block per batch item.
 template <class R, class Damping>
@@ -666,10 +699,10 @@ __device__ __forceinline__ void newmark_start_item(int i, const ops::NewmarkCoef
                                                    Damping damping, const R* b, R* x) {
   auto node_system = [&](int n, Vec3<R> e) { return newmark_node_apply(c, mass, damping, n, e, zero3<R>()); };
   double sums[kStartSums];
-  start_shares(dirs, i, SSC_ITEM, n_cell, n_node, h, c.a_k, rotation, cell_weights, cell_nodes, lambda, mu, fixed, x,
-               b, node_system, sums);
+  start_shares(dirs, i, SSC_ITEM, n_cell, n_node, h, c.a_k, rotation, cell_weights, cell_nodes, lambda, mu, fixed,
+               nullptr, nullptr, x, b, node_system, sums);
   block_sum<kStartSums>(sums);
-  start_moves(dirs, i, SSC_ITEM, n_node, fixed, sums, x);
+  start_moves(dirs, i, SSC_ITEM, n_cell, n_node, cell_nodes, fixed, nullptr, nullptr, sums, x);
 }
 
 // A grid solve's setup (newmark_diag and newmark_setup of the host-driven sequence): the
@@ -745,6 +778,7 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
     add_pcg_sums(acc, rn, un, system(n, un, zero3<R>()));
   };
   newmark_grid_start(g, directions, n_cell, n_node, h, c.a_k, rotation, cell_weights, cell_nodes, lambda, mu, fixed,
+                     node_cell_offset, static_cast<const int*>(nullptr),
                      [&](int n, Vec3<R> e) { return newmark_node_apply(c, mass, damping, n, e, zero3<R>()); });
   double unused = 0;
   cells(g.x, unused);
@@ -853,21 +887,31 @@ __device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const 
   auto system = [&](const CornerLane<R>& L, Vec3<R> e, Vec3<R> ke) {
     return L.fixed ? e : add_damping(ops::newmark_system_apply(c, L.mass, e, ke), damping, L.node, e);
   };
-  // One lane of a phase: start (r = b - A x from the corners of A x in `in`, s = p = 0) or
-  // an iteration (w = A u from `in` and u = M^-1 r_in; s, p, r, x updated with the step and
-  // beta of g); then u = M^-1 r, the corners of A u into `out`, and the sums {r.u, (A u).u,
-  // r.r} (start: and b.b in acc[3]) into acc.
-  auto work = [&](int t, const CornerLane<R>& L, bool start, const R* in, R* out, const R* r_in, const R* s_in,
-                  R* r_out, R* s_out, double (&acc)[4]) {
+  // What a lane's phase reads of other lanes' results before it knows the iteration's step
+  // and beta: K e at its node from the corner buffer `in`, and the node's r and s from r_in and
+  // s_in (at the start: b and x).
+  struct Loads {
+    Vec3<R> ke, r, s;
+  };
+  auto fetch = [&](const CornerLane<R>& L, bool start, const R* in, const R* r_in, const R* s_in) {
     const int m = L.node;
-    const Vec3<R> ke = L.gather(in, node_cell_offset, node_cell_entry);
+    return Loads{L.gather(in, node_cell_offset, node_cell_entry), load3(start ? g.b : r_in, m),
+                 load3(start ? g.x : s_in, m)};
+  };
+  // One lane of a phase from its loads f: start (r = b - A x, s = p = 0) or an iteration
+  // (w = A u and u = M^-1 r; s, p, r, x updated with the step and beta of g); then u = M^-1 r,
+  // the corners of A u into `out`, and the sums {r.u, (A u).u, r.r} (start: and b.b in
+  // acc[3]) into acc.
+  auto work = [&](int t, const CornerLane<R>& L, bool start, const Loads& f, R* out, R* r_out, R* s_out,
+                  double (&acc)[4]) {
+    const int m = L.node;
     Vec3<R> sn = zero3<R>(), pn = zero3<R>(), rn;
     if (start) {
-      rn = load3(g.b, m) - system(L, load3(g.x, m), ke);
+      rn = f.r - system(L, f.s, f.ke);
     } else {
-      const Vec3<R> rm = load3(r_in, m), um = times(L.inv, rm);
-      sn = system(L, um, ke) + g.beta * load3(s_in, m);
-      rn = rm - g.step * sn;
+      const Vec3<R> um = times(L.inv, f.r);
+      sn = system(L, um, f.ke) + g.beta * f.s;
+      rn = f.r - g.step * sn;
       if (L.owner) pn = um + g.beta * load3(g.p, m);
     }
     const Vec3<R> un = times(L.inv, rn);
@@ -881,20 +925,25 @@ __device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const 
     store3(g.p, m, pn);
     if (!start) store3(g.x, m, load3(g.x, m) + g.step * pn);
     add_pcg_sums(acc, rn, un, system(L, un, zero3<R>()));
-    if (start) {
-      const Vec3<R> bm = load3(g.b, m);
-      for (int k = 0; k < 3; ++k) acc[3] += double(bm[k]) * double(bm[k]);
-    }
+    if (start)
+      for (int k = 0; k < 3; ++k) acc[3] += double(f.r[k]) * double(f.r[k]);
   };
-  // t == rank on every thread of a warp at once (the first pass), so the branch is uniform.
-  auto phase = [&](bool start, const R* in, R* out, const R* r_in, const R* s_in, R* r_out, R* s_out,
-                   double (&acc)[4]) {
+  // t == rank on every thread of a warp at once (the first pass), so the branch is uniform. The
+  // own lane's loads come in own_loads (fetched inside the grid sum before, GridPcg::sum);
+  // further lanes fetch theirs here.
+  auto phase = [&](bool start, const Loads& own_loads, const R* in, R* out, const R* r_in, const R* s_in, R* r_out,
+                   R* s_out, double (&acc)[4]) {
     for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop
-      if (t == rank) work(t, own, start, in, out, r_in, s_in, r_out, s_out, acc);
-      else work(t, lane(t), start, in, out, r_in, s_in, r_out, s_out, acc);
+      if (t == rank) {
+        work(t, own, start, own_loads, out, r_out, s_out, acc);
+      } else {
+        const CornerLane<R> L = lane(t);
+        work(t, L, start, fetch(L, start, in, r_in, s_in), out, r_out, s_out, acc);
+      }
     }
   };
   newmark_grid_start(g, directions, n_cell, n_node, h, c.a_k, rotation, cell_weights, cell_nodes, lambda, mu, fixed,
+                     node_cell_offset, node_cell_entry,
                      [&](int n, Vec3<R> e) { return newmark_node_apply(c, mass, damping, n, e, zero3<R>()); });
   // The corners of A x.
   for (int t = rank; t < lanes_warps; t += threads) {
@@ -904,18 +953,23 @@ __device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const 
   }
   grid_sync(g.bar);
   R *c_in = corner2, *c_out = corner, *r_in = g.r, *r_out = r2, *s_in = g.s, *s_out = s2;
+  Loads own_loads = fetch(own, true, corner, nullptr, nullptr);
+  auto fetch_own = [&]() { own_loads = fetch(own, false, c_in, r_in, s_in); };
   double sums[4] = {0, 0, 0, 0};
-  phase(true, corner, corner2, nullptr, nullptr, g.r, g.s, sums);
-  g.sum(sums);
+  phase(true, own_loads, corner, corner2, nullptr, nullptr, g.r, g.s, sums);
+  g.sum(sums, fetch_own);
   const double start[3] = {sums[0], sums[1], sums[2]};
-  grid_loop(g, n_node, start, sums[3], [&](double (&acc)[3]) {
-    double a4[4] = {0, 0, 0, 0};
-    phase(false, c_in, c_out, r_in, s_in, r_out, s_out, a4);
-    for (int k = 0; k < 3; ++k) acc[k] = a4[k];
-    swap_pointers(c_in, c_out);
-    swap_pointers(r_in, r_out);
-    swap_pointers(s_in, s_out);
-  });
+  grid_loop(
+      g, n_node, start, sums[3],
+      [&](double (&acc)[3]) {
+        double a4[4] = {0, 0, 0, 0};
+        phase(false, own_loads, c_in, c_out, r_in, s_in, r_out, s_out, a4);
+        for (int k = 0; k < 3; ++k) acc[k] = a4[k];
+        swap_pointers(c_in, c_out);
+        swap_pointers(r_in, r_out);
+        swap_pointers(s_in, s_out);
+      },
+      fetch_own);
 }
 
 // The band solves' incidence: the thread's first band node keeps its degree and
