@@ -3,8 +3,9 @@
 // gen::grid_sum, the very code of the generated kernels' prelude) against a thread-block
 // cluster's hardware barrier and a sum over distributed shared memory, and one "phase"
 // of each kind: every thread reads a value another block wrote before the barrier.
-// Each launch runs `kSteps` of them back to back; the counter `per_step` is the time of
-// one (launch overhead shared out over the steps).
+// A "neighbor" phase waits only for the blocks it reads from, as a solve whose blocks hold
+// parts of a mesh could. Each launch runs `kSteps` of them back to back; the counter
+// `per_step` is the time of one (launch overhead shared out over the steps).
 #include <benchmark/benchmark.h>
 
 #include <string>
@@ -36,6 +37,9 @@ __device__ inline T* map_rank(T* p, unsigned rank) {
   asm volatile("mapa.u64 %0, %1, %2;" : "=l"(r) : "l"(p), "r"(rank));
   return reinterpret_cast<T*>(r);
 }
+__device__ inline void store_release(unsigned long long* p, unsigned long long v) {
+  asm volatile("st.release.gpu.global.u64 [%0], %1;" ::"l"(p), "l"(v) : "memory");
+}
 }  // namespace bench
 
 extern "C" __global__ void __launch_bounds__(SSC_GRID) grid_barriers(double* bar, int steps) {
@@ -61,6 +65,27 @@ extern "C" __global__ void __launch_bounds__(SSC_GRID) grid_phases(double* bar, 
     const double v = __ldcg(x + (k & 1) * n + other);
     x[((k + 1) & 1) * n + me] = v * 0.5 + 1.0;
     gen::grid_sync(reinterpret_cast<unsigned long long*>(bar));
+  }
+}
+
+// The phase of grid_phases where a block waits only for the blocks it depends on, as a mesh
+// partitioned into blocks would (here the blocks b - 2 .. b + 2, mod gridDim.x; a block reads
+// b + 1's values): each block publishes the steps it has finished in its own flag (release,
+// 128 bytes apart) and polls its neighbours' (acquire). flags must be zero at the launch.
+extern "C" __global__ void __launch_bounds__(SSC_GRID) neighbor_phases(double* flags, double* x, int steps) {
+  unsigned long long* flag = reinterpret_cast<unsigned long long*>(flags);
+  const int n = gridDim.x * SSC_GRID, me = blockIdx.x * SSC_GRID + threadIdx.x;
+  const int other = ((blockIdx.x + 1) % gridDim.x) * SSC_GRID + (threadIdx.x * 7 + 3) % SSC_GRID;
+  const int neighbor = (int(blockIdx.x) + int(gridDim.x) + int(threadIdx.x) - 2) % int(gridDim.x);
+  for (int k = 0; k < steps; ++k) {
+    const double v = __ldcg(x + (k & 1) * n + other);
+    x[((k + 1) & 1) * n + me] = v * 0.5 + 1.0;
+    __syncthreads();
+    if (threadIdx.x == 0) bench::store_release(flag + 16 * blockIdx.x, (unsigned long long)(k + 1));
+    if (threadIdx.x < 5)
+      while (gen::load_acquire(flag + 16 * neighbor) < (unsigned long long)(k + 1)) {
+      }
+    __syncthreads();
   }
 }
 
@@ -116,11 +141,13 @@ extern "C" __global__ void __launch_bounds__(1024) cluster_phases(int steps, dou
 }
 )";
 
-const char* const kNames[] = {"grid_barriers", "grid_sums", "grid_phases", "cluster_barriers", "cluster_sums",
-                              "cluster_phases"};
+const char* const kNames[] = {"grid_barriers", "grid_sums",      "grid_phases",    "cluster_barriers",
+                              "cluster_sums",  "cluster_phases", "neighbor_phases"};
+constexpr int kKernels = 7;
+bool cluster_kernel(int k) { return k >= 3 && k <= 5; }
 
 struct SyncDevice : BenchDevice {
-  cu::Function f[6] = {};
+  cu::Function f[kKernels] = {};
   cu::DevicePtr scratch = 0;  // barrier counter, partial sums, the phase vectors
   bool clusters = false;
 
@@ -128,10 +155,10 @@ struct SyncDevice : BenchDevice {
     if (!d) return;
     clusters = major >= 9 && d->has_clusters();
     const std::string source = kernel_prelude(CodegenOptions{}) + kSyncKernels;
-    for (int k = 0; k < 6; ++k) {
-      if (k >= 3 && !clusters) break;
+    for (int k = 0; k < kKernels; ++k) {
+      if (cluster_kernel(k) && !clusters) continue;
       f[k] = load(kNames[k], source);
-      if (k >= 3) cu::check(d->FuncSetAttribute(f[k], cu::kFuncAttrNonPortableClusterSize, 1), "cuFuncSetAttribute");
+      if (cluster_kernel(k)) cu::check(d->FuncSetAttribute(f[k], cu::kFuncAttrNonPortableClusterSize, 1), "cuFuncSetAttribute");
     }
     cu::check(d->MemAlloc(&scratch, 8u << 20), "cuMemAlloc");
   }
@@ -156,7 +183,8 @@ void report(benchmark::State& state) {
                                                   benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
 }
 
-// kind 0..2: grid_barriers, grid_sums, grid_phases over range(0) blocks of SSC_GRID threads.
+// kind 0..2 and 6: grid_barriers, grid_sums, grid_phases, neighbor_phases over range(0) blocks
+// of SSC_GRID threads.
 void BM_GridSync(benchmark::State& state, int kind) {
   SyncDevice* g = sync_device(state, false);
   if (!g) return;
@@ -166,9 +194,12 @@ void BM_GridSync(benchmark::State& state, int kind) {
   void* barrier_args[] = {&bar, &steps};
   void* sum_args[] = {&bar, &partial, &steps, &out};
   void* phase_args[] = {&bar, &x, &steps};
-  void** args = kind == 0 ? barrier_args : kind == 1 ? sum_args : phase_args;
+  cu::DevicePtr flags = partial;
+  void* neighbor_args[] = {&flags, &x, &steps};
+  void** args = kind == 0 ? barrier_args : kind == 1 ? sum_args : kind == 2 ? phase_args : neighbor_args;
   auto launch = [&] {
     cu::check(g->d->MemsetD8(bar, 0, 8), "cuMemsetD8");
+    if (kind == 6) cu::check(g->d->MemsetD8(flags, 0, 128 * blocks), "cuMemsetD8");
     cu::check(g->d->LaunchCooperativeKernel(g->f[kind], blocks, 1, 1, kGridBlock, 1, 1, 0, nullptr, args), kNames[kind]);
     cu::check(g->d->CtxSynchronize(), kNames[kind]);
   };
@@ -207,6 +238,8 @@ BENCHMARK_CAPTURE(BM_GridSync, sum, 1)->Name("GpuSync/grid_sum3")->Arg(8)->Arg(1
     ->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_GridSync, phase, 2)->Name("GpuSync/grid_phase")->Arg(8)->Arg(16)->Arg(32)->Arg(64)->Arg(128)
     ->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_GridSync, neighbor_phase, 6)->Name("GpuSync/neighbor_phase")->Arg(8)->Arg(16)->Arg(32)->Arg(64)
+    ->Arg(128)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_ClusterSync, barrier, 3)->Name("GpuSync/cluster_barrier")->Arg(2)->Arg(4)->Arg(8)->Arg(16)
     ->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK_CAPTURE(BM_ClusterSync, sum, 4)->Name("GpuSync/cluster_sum3")->Arg(2)->Arg(4)->Arg(8)->Arg(16)
