@@ -158,7 +158,8 @@ struct SyncDevice : BenchDevice {
     for (int k = 0; k < kKernels; ++k) {
       if (cluster_kernel(k) && !clusters) continue;
       f[k] = load(kNames[k], source);
-      if (cluster_kernel(k)) cu::check(d->FuncSetAttribute(f[k], cu::kFuncAttrNonPortableClusterSize, 1), "cuFuncSetAttribute");
+      if (cluster_kernel(k))
+        cu::check(d->FuncSetAttribute(f[k], cu::kFuncAttrNonPortableClusterSize, 1), "cuFuncSetAttribute");
     }
     cu::check(d->MemAlloc(&scratch, 8u << 20), "cuMemAlloc");
   }
