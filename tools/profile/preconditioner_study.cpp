@@ -14,7 +14,8 @@
 // with the solve and factorization times.
 // Each line gives the iterations and their cost in fine-grid operator applications (a CG
 // iteration 1, a V-cycle 2 nu + 1 on the finest level plus an eighth of that per level below).
-// Usage: ssc_preconditioner_study FILE... [--tol 1e-6] [--frozen]
+// With --forms, Jacobi PCG alone in the engine's, the GPU's and a pipelined order (jacobi_cg_form).
+// Usage: ssc_preconditioner_study FILE... [--tol 1e-6] [--frozen | --forms]
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 #include <chrono>
@@ -100,6 +101,57 @@ int pcg(const Sparse& A, const Vector& b, Vector x, const std::function<Vector(c
     rz = rz_new;
   }
   return max_iterations + 1;
+}
+
+// The Jacobi-PCG iterates in three orders of the same recurrences: the engine's (pcg above), the
+// GPU's Chronopoulos-Gear form (one reduction an iteration, the sums gamma = r.u, delta = (A u).u
+// and |r|^2 after the operator product) and the pipelined form of Ghysels and Vanroose (2014),
+// whose reduction is needed only after the next operator product (m = M^-1 w, n = A m), so it
+// could travel while that product runs. Each stops on its recurrence's |r| <= tol |b|; returns
+// the iterations and, in true_rel, |b - A x| / |b| at the stop.
+enum class CgForm { ChronopoulosGear, Pipelined };
+// In T (float: the vectors and products in float, the sums in double, as on the GPU).
+template <class T>
+int jacobi_cg_form(CgForm form, const Sparse& A_double, const Vector& b_double, const Vector& x_double,
+                   const Vector& inv_diag_double, double tol, int max_iterations, double* true_rel) {
+  using V = Eigen::Matrix<T, Eigen::Dynamic, 1>;
+  const Eigen::SparseMatrix<T> A = A_double.cast<T>();
+  const V b = b_double.cast<T>(), inv_diag = inv_diag_double.cast<T>();
+  auto dot = [](const V& a, const V& c) { return a.template cast<double>().dot(c.template cast<double>()); };
+  const double b_norm = b_double.norm(), stop = tol * b_norm;
+  V x = x_double.cast<T>();
+  V r = b - A * x, u = inv_diag.cwiseProduct(r), w = A * u;
+  V p = V::Zero(b.size()), s = p, q = p, z = p;
+  double gamma_old = 0, alpha = 0;
+  int it = 0;
+  for (;; ++it) {
+    const double gamma = dot(r, u), delta = dot(w, u), rr = dot(r, r);
+    if (std::sqrt(rr) <= stop || it > max_iterations) break;
+    const double beta = it == 0 ? 0.0 : gamma / gamma_old;
+    alpha = it == 0 ? gamma / delta : gamma / (delta - beta * gamma / alpha);
+    gamma_old = gamma;
+    const T a = T(alpha), c = T(beta);
+    if (form == CgForm::Pipelined) {
+      const V m = inv_diag.cwiseProduct(w), n = A * m;
+      z = n + c * z;
+      q = m + c * q;
+      s = w + c * s;
+      p = u + c * p;
+      x += a * p;
+      r -= a * s;
+      u -= a * q;
+      w -= a * z;
+    } else {
+      p = u + c * p;
+      s = w + c * s;
+      x += a * p;
+      r -= a * s;
+      u = inv_diag.cwiseProduct(r);
+      w = A * u;
+    }
+  }
+  *true_rel = (b_double - A_double * x.template cast<double>()).norm() / b_norm;
+  return it;
 }
 
 // The largest eigenvalue of D^-1 A by power iteration.
@@ -250,11 +302,13 @@ struct AdditiveTwoLevel {
 int main(int argc, char** argv) {
   std::vector<std::string> files;
   double tol = 1e-6;
-  bool frozen = false;
+  bool frozen = false, forms = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--frozen")
       frozen = true;
+    else if (a == "--forms")
+      forms = true;
     else if (a == "--tol" && i + 1 < argc)
       tol = std::atof(argv[++i]);
     else
@@ -263,6 +317,25 @@ int main(int argc, char** argv) {
   if (files.empty()) {
     std::fprintf(stderr, "usage: ssc_preconditioner_study FILE... [--tol 1e-6] (files from SSC_DUMP_NEWMARK_SYSTEM)\n");
     return 2;
+  }
+  if (forms) {
+    for (const std::string& f : files) {
+      const System s = read_system(f);
+      const Vector inv_diag = s.A.diagonal().cwiseInverse();
+      const int engine = pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return Vector(inv_diag.cwiseProduct(r)); }, tol,
+                             20000);
+      std::printf("%s: Jacobi PCG %d iterations", f.c_str(), engine);
+      for (const bool single : {false, true})
+        for (const CgForm form : {CgForm::ChronopoulosGear, CgForm::Pipelined}) {
+          double rel = 0;
+          const int it = single ? jacobi_cg_form<float>(form, s.A, s.rhs, s.guess, inv_diag, tol, 20000, &rel)
+                                : jacobi_cg_form<double>(form, s.A, s.rhs, s.guess, inv_diag, tol, 20000, &rel);
+          std::printf("; %s %s %d (true residual %.2e of |b|)", single ? "float" : "double",
+                      form == CgForm::Pipelined ? "pipelined" : "Chronopoulos-Gear", it, rel);
+        }
+      std::printf("\n");
+    }
+    return 0;
   }
   if (frozen) {
     // A factor of the first file's matrix as every file's preconditioner (one triangular pair a
