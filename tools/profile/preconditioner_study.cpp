@@ -315,7 +315,8 @@ int main(int argc, char** argv) {
       files.push_back(a);
   }
   if (files.empty()) {
-    std::fprintf(stderr, "usage: ssc_preconditioner_study FILE... [--tol 1e-6] (files from SSC_DUMP_NEWMARK_SYSTEM)\n");
+    std::fprintf(stderr, "usage: ssc_preconditioner_study FILE... [--tol 1e-6] [--frozen | --forms] (files from "
+                         "SSC_DUMP_NEWMARK_SYSTEM)\n");
     return 2;
   }
   if (forms) {
