@@ -535,6 +535,8 @@ struct CornerElement {
     lambda = lambdas[e];
     mu = mus[e];
   }
+  __device__ __forceinline__ CornerElement(int t, const Mat3<R>& rotation_, R weight_, R lambda_, R mu_)
+      : rotation(rotation_), weight(weight_), lambda(lambda_), mu(mu_), corner(t & 7) {}
   // The corner of R K R^T e (newmark_apply_cell's corotated_apply) given e at the corner's
   // node, eight lanes per cell: lane c rotates corner c, gets its edge neighbours' rotated
   // vectors and stress columns by warp shuffles, assembles corner c. All 32 lanes of the
@@ -740,21 +742,60 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
                                                  const R* fixed, Damping damping, const int* node_cell_offset,
                                                  const int* node_cell_entry, R* corner, Start directions) {
   const int rank = g.rank, threads = g.threads, lanes = 8 * n_cell, lanes_warps = (lanes + 31) / 32 * 32;
-  // The thread's first cell corner and node keep their incidence in registers.
-  const int corner_node = rank < lanes ? cell_nodes[rank] : 0;
-  int node_entry[8], node_entries = 9;
-  if (rank < n_node) {
-    const int first = node_cell_offset[rank];
-    node_entries = node_cell_offset[rank + 1] - first;
-#pragma unroll
-    for (int k = 0; k < 8; ++k) node_entry[k] = k < node_entries ? node_cell_entry[first + k] : 0;
+  // What the element apply of the thread's first kCachedCorners cell corners reads that stays
+  // fixed for the solve, in shared memory: from global memory every iteration read it again
+  // after a grid barrier's acquire (measured 6-7 % faster at batch 32 in shared memory,
+  // docs/benchmarks.md). A cell's 8 lanes are 8 threads of one block in every pass, so the
+  // cell's values are kept once (by its first lane).
+  constexpr int kCachedCorners = 10, kCells = SSC_GRID / 8;
+  __shared__ int s_node[kCachedCorners][SSC_GRID];
+  __shared__ R s_weight[kCachedCorners][SSC_GRID];
+  __shared__ R s_cell[kCachedCorners][kCells][11];  // rotation (9), lambda, mu
+  const int tid = threadIdx.x;
+  for (int k = 0, t = rank; k < kCachedCorners && t < lanes_warps; ++k, t += threads) {
+    const bool valid = t < lanes;
+    s_node[k][tid] = valid ? cell_nodes[t] : 0;
+    s_weight[k][tid] = cell_weights[valid ? t : (t & 7)];
+    if ((tid & 7) == 0) {
+      const int e = valid ? t >> 3 : 0;
+      for (int j = 0; j < 9; ++j) s_cell[k][tid >> 3][j] = rotation[9 * e + j];
+      s_cell[k][tid >> 3][9] = lambda[e];
+      s_cell[k][tid >> 3][10] = mu[e];
+    }
   }
-  auto gather = [&](int n) {
-    if (n != rank || node_entries > 8) return ops::gather_corner_sum(corner, node_cell_offset, node_cell_entry, n);
+  __syncthreads();
+  auto node_at = [&](int k, int t) { return t >= lanes ? 0 : k < kCachedCorners ? s_node[k][tid] : cell_nodes[t]; };
+  auto element_at = [&](int k, int t) {
+    if (k >= kCachedCorners) return CornerElement<R>(t, t < lanes, rotation, cell_weights, lambda, mu);
+    const R* v = s_cell[k][tid >> 3];
+    Mat3<R> m;
+#pragma unroll
+    for (int i = 0; i < 3; ++i)
+#pragma unroll
+      for (int j = 0; j < 3; ++j) m.m[i][j] = v[3 * i + j];
+    return CornerElement<R>(t, m, s_weight[k][tid], v[9], v[10]);
+  };
+  // The corner entries of the thread's first kCachedNodes nodes, in shared memory too (a node
+  // in more than 8 cells, none on a hexahedral grid, reads its own from global memory).
+  constexpr int kCachedNodes = 3;
+  __shared__ int s_entries[kCachedNodes][SSC_GRID];
+  __shared__ int s_entry[kCachedNodes][8][SSC_GRID];
+  for (int k = 0, n = rank; k < kCachedNodes && n < n_node; ++k, n += threads) {
+    const int first = node_cell_offset[n];
+    const int entries = node_cell_offset[n + 1] - first;
+    s_entries[k][tid] = entries;
+#pragma unroll
+    for (int j = 0; j < 8; ++j) s_entry[k][j][tid] = j < entries ? node_cell_entry[first + j] : 0;
+  }
+  __syncthreads();
+  // K e at node n, the thread's k-th.
+  auto gather = [&](int k, int n) {
+    const int entries = k < kCachedNodes ? s_entries[k][tid] : 9;
+    if (entries > 8) return ops::gather_corner_sum(corner, node_cell_offset, node_cell_entry, n);
     Vec3<R> kp = zero3<R>();
 #pragma unroll
-    for (int k = 0; k < 8; ++k)
-      if (k < node_entries) kp += load3(corner, node_entry[k]);
+    for (int j = 0; j < 8; ++j)
+      if (j < entries) kp += load3(corner, s_entry[k][j][tid]);
     return kp;
   };
   // (A + C) e at node n given K e there.
@@ -762,15 +803,18 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
     return fixed[n] != R(0) ? e : newmark_node_apply(c, mass, damping, n, e, ke);
   };
   // The corners of A e for the nodal values e in `from`; a_k (corner force . e) into delta.
+  // The next corner's e is loaded before this one's element apply.
   auto cells = [&](const R* from, double& delta) {
-    for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop
-      const bool valid = t < lanes;
-      const int nd = !valid ? 0 : t == rank ? corner_node : cell_nodes[t];
-      const Vec3<R> e = load3(from, nd);
-      const Vec3<R> y = CornerElement<R>(t, valid, rotation, cell_weights, lambda, mu).apply(h, e);
-      if (!valid) continue;
-      store3(corner, t, y);
-      add_corner_delta(delta, c.a_k, y, e);
+    Vec3<R> e = rank < lanes_warps ? load3(from, node_at(0, rank)) : zero3<R>();
+    for (int k = 0, t = rank; t < lanes_warps; ++k, t += threads) {  // whole warps stay in the loop
+      const int t_next = t + threads;
+      const Vec3<R> e_next = t_next < lanes_warps ? load3(from, node_at(k + 1, t_next)) : zero3<R>();
+      const Vec3<R> y = element_at(k, t).apply(h, e);
+      if (t < lanes) {
+        store3(corner, t, y);
+        add_corner_delta(delta, c.a_k, y, e);
+      }
+      e = e_next;
     }
   };
   // Node n's sums of the new r and u: gamma, delta's node part, |r|^2.
@@ -784,8 +828,8 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
   cells(g.x, unused);
   grid_sync(g.bar);
   double sums[4] = {0, 0, 0, 0};
-  for (int n = rank; n < n_node; n += threads) {
-    const Vec3<R> bn = load3(g.b, n), rn = bn - system(n, load3(g.x, n), gather(n));
+  for (int k = 0, n = rank; n < n_node; ++k, n += threads) {
+    const Vec3<R> bn = load3(g.b, n), rn = bn - system(n, load3(g.x, n), gather(k, n));
     const Vec3<R> un = times(load3(g.inv_diag, n), rn);
     store3(g.r, n, rn);
     store3(g.z, n, un);
@@ -801,9 +845,9 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
   g.sum(sums);
   const double start[3] = {sums[0], sums[1], sums[2]};
   grid_loop(g, n_node, start, sums[3], [&](double (&acc)[3]) {
-    for (int n = rank; n < n_node; n += threads) {
+    for (int k = 0, n = rank; n < n_node; ++k, n += threads) {
       const Vec3<R> inv = load3(g.inv_diag, n), um = load3(g.z, n);
-      const Vec3<R> sn = system(n, um, gather(n)) + g.beta * load3(g.s, n);
+      const Vec3<R> sn = system(n, um, gather(k, n)) + g.beta * load3(g.s, n);
       const Vec3<R> pn = um + g.beta * load3(g.p, n);
       const Vec3<R> rn = load3(g.r, n) - g.step * sn;
       const Vec3<R> un = times(inv, rn);
@@ -823,18 +867,23 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
 // cell's element, its node with the node's Jacobi diagonal, mass and fixed flag, whether the
 // lane owns the node (the node's first corner entry, node_cell_entry[node_cell_offset[n]]),
 // and the node's corner entries (up to 8; more are read from the arrays).
+// Where a corner lane's node is and who owns it (the part of CornerLane kept in registers).
+struct LaneIncidence {
+  int node, entries, entry[8];
+  bool valid, fixed, owner;
+};
+
 template <class R>
-struct CornerLane {
+struct CornerLane : LaneIncidence {
   CornerElement<R> element;
   Vec3<R> inv;
   R mass;
-  int node, entries, entry[8];
-  bool valid, fixed, owner;
   __device__ __forceinline__ CornerLane(int t, int lanes, const R* rotation, const R* cell_weights,
                                         const R* lambda, const R* mu, const int* cell_nodes, const R* inv_diag,
                                         const R* masses, const R* fixed_flags, const int* node_cell_offset,
                                         const int* node_cell_entry)
-      : element(t, t < lanes, rotation, cell_weights, lambda, mu), valid(t < lanes) {
+      : element(t, t < lanes, rotation, cell_weights, lambda, mu) {
+    valid = t < lanes;
     node = valid ? cell_nodes[t] : 0;
     inv = load3(inv_diag, node);
     mass = masses[node];
@@ -845,6 +894,9 @@ struct CornerLane {
     for (int k = 0; k < 8; ++k) entry[k] = k < entries ? node_cell_entry[first + k] : 0;
     owner = valid && node_cell_entry[first] == t;
   }
+  __device__ __forceinline__ CornerLane(const LaneIncidence& at, const CornerElement<R>& element_, Vec3<R> inv_,
+                                        R mass_)
+      : LaneIncidence(at), element(element_), inv(inv_), mass(mass_) {}
   // K e at the lane's node from a corner buffer (ops::gather_corner_sum's order).
   __device__ __forceinline__ Vec3<R> gather(const R* from, const int* node_cell_offset,
                                             const int* node_cell_entry) const {
@@ -882,7 +934,40 @@ __device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const 
     return CornerLane<R>(t, lanes, rotation, cell_weights, lambda, mu, cell_nodes, g.inv_diag, mass, fixed,
                          node_cell_offset, node_cell_entry);
   };
-  const CornerLane<R> own = lane(rank);
+  // The thread's first corner lane: its incidence in registers, its element, Jacobi diagonal
+  // and mass in shared memory (a cell's values once, by its first lane). Kept in registers
+  // for the whole solve, they pushed the kernel into spills.
+  __shared__ R s_cell[SSC_GRID / 8][11];  // rotation (9), lambda, mu
+  __shared__ R s_lane[SSC_GRID][5];       // weight, inv (3), mass
+  const int tid = threadIdx.x;
+  LaneIncidence own_at;
+  {
+    const CornerLane<R> L = lane(rank);
+    own_at = L;
+    if ((tid & 7) == 0) {
+#pragma unroll
+      for (int i = 0; i < 3; ++i)
+#pragma unroll
+        for (int j = 0; j < 3; ++j) s_cell[tid >> 3][3 * i + j] = L.element.rotation.m[i][j];
+      s_cell[tid >> 3][9] = L.element.lambda;
+      s_cell[tid >> 3][10] = L.element.mu;
+    }
+    const R v[5] = {L.element.weight, L.inv.x, L.inv.y, L.inv.z, L.mass};
+#pragma unroll
+    for (int k = 0; k < 5; ++k) s_lane[tid][k] = v[k];
+  }
+  __syncthreads();
+  auto own = [&]() {
+    const R* cv = s_cell[tid >> 3];
+    const R* lv = s_lane[tid];
+    Mat3<R> m;
+#pragma unroll
+    for (int i = 0; i < 3; ++i)
+#pragma unroll
+      for (int j = 0; j < 3; ++j) m.m[i][j] = cv[3 * i + j];
+    return CornerLane<R>(own_at, CornerElement<R>(rank, m, lv[0], cv[9], cv[10]), make_vec3(lv[1], lv[2], lv[3]),
+                         lv[4]);
+  };
   // (A + C) e at the lane's node given K e there.
   auto system = [&](const CornerLane<R>& L, Vec3<R> e, Vec3<R> ke) {
     return L.fixed ? e : add_damping(ops::newmark_system_apply(c, L.mass, e, ke), damping, L.node, e);
@@ -935,7 +1020,7 @@ __device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const 
                    R* s_out, double (&acc)[4]) {
     for (int t = rank; t < lanes_warps; t += threads) {  // whole warps stay in the loop
       if (t == rank) {
-        work(t, own, start, own_loads, out, r_out, s_out, acc);
+        work(t, own(), start, own_loads, out, r_out, s_out, acc);
       } else {
         const CornerLane<R> L = lane(t);
         work(t, L, start, fetch(L, start, in, r_in, s_in), out, r_out, s_out, acc);
@@ -947,14 +1032,14 @@ __device__ __forceinline__ void newmark_pcg_grid_one_phase(GridPcg<R>& g, const 
                      [&](int n, Vec3<R> e) { return newmark_node_apply(c, mass, damping, n, e, zero3<R>()); });
   // The corners of A x.
   for (int t = rank; t < lanes_warps; t += threads) {
-    const CornerLane<R> L = t == rank ? own : lane(t);
+    const CornerLane<R> L = t == rank ? own() : lane(t);
     const Vec3<R> y = L.element.apply(h, load3(g.x, L.node));
     if (L.valid) store3(corner, t, y);
   }
   grid_sync(g.bar);
   R *c_in = corner2, *c_out = corner, *r_in = g.r, *r_out = r2, *s_in = g.s, *s_out = s2;
-  Loads own_loads = fetch(own, true, corner, nullptr, nullptr);
-  auto fetch_own = [&]() { own_loads = fetch(own, false, c_in, r_in, s_in); };
+  Loads own_loads = fetch(own(), true, corner, nullptr, nullptr);
+  auto fetch_own = [&]() { own_loads = fetch(own(), false, c_in, r_in, s_in); };
   double sums[4] = {0, 0, 0, 0};
   phase(true, own_loads, corner, corner2, nullptr, nullptr, g.r, g.s, sums);
   g.sum(sums, fetch_own);
