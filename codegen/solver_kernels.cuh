@@ -476,15 +476,18 @@ __device__ __forceinline__ void grid_loop(GridPcg<R>& g, int count, const double
   const double b_norm = sqrt(bb) < (sizeof(R) == 4 ? 1e-20 : 1e-100) ? 0.0 : sqrt(bb);  // runtime/pcg.h
   // Every block reads the reference before rank 0 may overwrite it with the same maximum.
   const double scale = residual_scale(b_norm, g.reference, g.reference_mode);
-  double gamma = start[0], alpha = start[0] / start[1], r_norm = sqrt(start[2]), rel = 0;
+  double gamma = start[0], alpha = start[0] / start[1], rr = start[2];
+  // Off the loop's critical path: the reciprocals the next iteration's step and beta need, and
+  // the test as |r|^2 against (tol scale)^2 (no square root or division after the sum).
+  double inv_gamma = 1.0 / gamma, inv_alpha = 1.0 / alpha;
+  const double bound = g.tol * scale, bound2 = bound * bound;
   int its = 0;
   bool active = false, converged = false;
   auto test = [&]() {
-    rel = r_norm / scale;
     active = false;
     converged = false;
-    if (rel <= g.tol) converged = true;
-    else if (its < g.max_it && isfinite(r_norm)) active = true;
+    if (rr <= bound2) converged = true;
+    else if (its < g.max_it && isfinite(rr)) active = true;
   };
   if (b_norm == 0.0) {
     for (int n = g.rank; n < count; n += g.threads) store3(g.x, n, zero3<R>());
@@ -498,15 +501,18 @@ __device__ __forceinline__ void grid_loop(GridPcg<R>& g, int count, const double
     iteration(acc);
     g.sum(acc, between);
     const double gamma_next = acc[0];
-    const double beta_next = gamma_next / gamma;
-    alpha = gamma_next / (acc[1] - beta_next * gamma_next / alpha);
+    const double beta_next = gamma_next * inv_gamma;
+    alpha = gamma_next / (acc[1] - beta_next * gamma_next * inv_alpha);
     gamma = gamma_next;
     g.step = R(alpha);
     g.beta = R(beta_next);
-    r_norm = sqrt(acc[2]);
+    rr = acc[2];
     ++its;
     test();
+    inv_gamma = 1.0 / gamma;
+    inv_alpha = 1.0 / alpha;
   }
+  const double r_norm = sqrt(rr), rel = r_norm / scale;
   if (g.rank == 0) {
     if (g.reference_mode != 0 && scale != 0.0) *g.reference = scale;
     const double st[10] = {scale, gamma, r_norm, 0, alpha, double(g.beta), 0, double(its), rel,
