@@ -71,7 +71,7 @@ struct NewmarkSystem {
   }
 
   void cell_apply(const Real* p, Real* corner) const {
-    if constexpr (std::is_same_v<Real, double>) {  // four cells at a time (runtime/element_packs.h)
+    if constexpr (std::is_same_v<Real, double>) {  // cells in SIMD packs (runtime/element_packs.h)
       static const bool scalar = std::getenv("SSC_CPU_SCALAR_APPLY") != nullptr;  // for comparisons
       if (!scalar) {
         stiffness_apply_cells(g.cell_count, g.h, rotation, weights, lambda, mu, p, g.cell_nodes.data(), corner);
