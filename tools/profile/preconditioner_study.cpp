@@ -15,9 +15,14 @@
 // Each line gives the iterations and their cost in fine-grid operator applications (a CG
 // iteration 1, a V-cycle 2 nu + 1 on the finest level plus an eighth of that per level below).
 // With --forms, Jacobi PCG alone in the engine's, the GPU's and a pipelined order (jacobi_cg_form).
-// Usage: ssc_preconditioner_study FILE... [--tol 1e-6] [--frozen | --forms]
+// With --boxes, block Jacobi on boxes of grid nodes (BoxJacobi: the exact inverse of A's block on
+// each box), a preconditioner a GPU block could apply from its own shared memory.
+// Usage: ssc_preconditioner_study FILE... [--tol 1e-6] [--frozen | --forms | --boxes]
+#include <Eigen/Dense>
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -299,23 +304,72 @@ struct AdditiveTwoLevel {
 
 }  // namespace
 
+// The nodes grouped into boxes of bx x by x bz grid nodes (from the rest positions); M^-1 r is
+// the exact solve with A's diagonal block of each box's dofs, boxes apart (non-overlapping
+// block Jacobi; bx = by = bz = 1 is the 3x3 node-block Jacobi).
+struct BoxJacobi {
+  std::vector<std::vector<long>> dofs;  // per box
+  std::vector<Eigen::LDLT<Eigen::MatrixXd>> blocks;
+  BoxJacobi(const System& s, int bx, int by, int bz) {
+    double lo[3] = {1e300, 1e300, 1e300};
+    for (int i = 0; i < s.nodes; ++i)
+      for (int d = 0; d < 3; ++d) lo[d] = std::min(lo[d], s.rest[3 * size_t(i) + d]);
+    std::map<std::tuple<long, long, long>, int> box_of;
+    const int size[3] = {bx, by, bz};
+    for (int i = 0; i < s.nodes; ++i) {
+      long key[3];
+      for (int d = 0; d < 3; ++d) key[d] = std::lround((s.rest[3 * size_t(i) + d] - lo[d]) / s.h) / size[d];
+      const auto it = box_of.emplace(std::make_tuple(key[0], key[1], key[2]), int(dofs.size())).first;
+      if (it->second == int(dofs.size())) dofs.emplace_back();
+      for (int d = 0; d < 3; ++d) dofs[size_t(it->second)].push_back(3L * i + d);
+    }
+    std::vector<int> box(size_t(3 * s.nodes)), local(size_t(3 * s.nodes));
+    for (size_t b = 0; b < dofs.size(); ++b)
+      for (size_t k = 0; k < dofs[b].size(); ++k) box[size_t(dofs[b][k])] = int(b), local[size_t(dofs[b][k])] = int(k);
+    std::vector<Eigen::MatrixXd> dense(dofs.size());
+    for (size_t b = 0; b < dofs.size(); ++b) dense[b] = Eigen::MatrixXd::Zero(long(dofs[b].size()), long(dofs[b].size()));
+    for (int k = 0; k < s.A.outerSize(); ++k)
+      for (Sparse::InnerIterator e(s.A, k); e; ++e)
+        if (box[size_t(e.row())] == box[size_t(e.col())])
+          dense[size_t(box[size_t(e.row())])](local[size_t(e.row())], local[size_t(e.col())]) = e.value();
+    for (const Eigen::MatrixXd& m : dense) blocks.emplace_back(m);
+  }
+  size_t largest() const {
+    size_t m = 0;
+    for (const auto& d : dofs) m = std::max(m, d.size());
+    return m;
+  }
+  Vector apply(const Vector& r) const {
+    Vector z(r.size());
+    for (size_t b = 0; b < dofs.size(); ++b) {
+      Eigen::VectorXd rb(long(dofs[b].size()));
+      for (size_t k = 0; k < dofs[b].size(); ++k) rb[long(k)] = r[dofs[b][k]];
+      const Eigen::VectorXd zb = blocks[b].solve(rb);
+      for (size_t k = 0; k < dofs[b].size(); ++k) z[dofs[b][k]] = zb[long(k)];
+    }
+    return z;
+  }
+};
+
 int main(int argc, char** argv) {
   std::vector<std::string> files;
   double tol = 1e-6;
-  bool frozen = false, forms = false;
+  bool frozen = false, forms = false, boxes = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--frozen")
       frozen = true;
     else if (a == "--forms")
       forms = true;
+    else if (a == "--boxes")
+      boxes = true;
     else if (a == "--tol" && i + 1 < argc)
       tol = std::atof(argv[++i]);
     else
       files.push_back(a);
   }
   if (files.empty()) {
-    std::fprintf(stderr, "usage: ssc_preconditioner_study FILE... [--tol 1e-6] [--frozen | --forms] (files from "
+    std::fprintf(stderr, "usage: ssc_preconditioner_study FILE... [--tol 1e-6] [--frozen | --forms | --boxes] (files from "
                          "SSC_DUMP_NEWMARK_SYSTEM)\n");
     return 2;
   }
@@ -334,6 +388,21 @@ int main(int argc, char** argv) {
           std::printf("; %s %s %d (true residual %.2e of |b|)", single ? "float" : "double",
                       form == CgForm::Pipelined ? "pipelined" : "Chronopoulos-Gear", it, rel);
         }
+      std::printf("\n");
+    }
+    return 0;
+  }
+  if (boxes) {
+    for (const std::string& f : files) {
+      const System s = read_system(f);
+      const Vector inv_diag = s.A.diagonal().cwiseInverse();
+      std::printf("%s: Jacobi %d", f.c_str(),
+                  pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return Vector(inv_diag.cwiseProduct(r)); }, tol, 20000));
+      for (const auto& b : std::vector<std::array<int, 3>>{{1, 1, 1}, {2, 2, 2}, {2, 2, 4}, {2, 4, 4}, {3, 3, 3}, {4, 4, 4}, {4, 4, 8}}) {
+        const BoxJacobi M(s, b[0], b[1], b[2]);
+        std::printf("; boxes %dx%dx%d (%zu, largest %zu dofs) %d", b[0], b[1], b[2], M.dofs.size(), M.largest(),
+                    pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return M.apply(r); }, tol, 20000));
+      }
       std::printf("\n");
     }
     return 0;
