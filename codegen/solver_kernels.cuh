@@ -869,16 +869,16 @@ __device__ __forceinline__ void newmark_pcg_grid(GridPcg<R>& g, const ops::Newma
   });
 }
 
-// What a corner lane of the one-phase solve reads that stays fixed for the whole solve: its
-// cell's element, its node with the node's Jacobi diagonal, mass and fixed flag, whether the
-// lane owns the node (the node's first corner entry, node_cell_entry[node_cell_offset[n]]),
-// and the node's corner entries (up to 8; more are read from the arrays).
 // Where a corner lane's node is and who owns it (the part of CornerLane kept in registers).
 struct LaneIncidence {
   int node, entries, entry[8];
   bool valid, fixed, owner;
 };
 
+// What a corner lane of the one-phase solve reads that stays fixed for the whole solve: its
+// cell's element, its node with the node's Jacobi diagonal, mass and fixed flag, whether the
+// lane owns the node (the node's first corner entry, node_cell_entry[node_cell_offset[n]]),
+// and the node's corner entries (up to 8; more are read from the arrays).
 template <class R>
 struct CornerLane : LaneIncidence {
   CornerElement<R> element;

@@ -1,10 +1,11 @@
 // The CPU's element apply several cells at a time: ops::corotated_apply instantiated on a pack
 // of doubles in SIMD lanes (GCC vector extensions), eight cells where the CPU has AVX-512, else
-// four (AVX2 where the CPU has it, else SSE2 pairs), chosen at run time. Each lane does the scalar code's operations in its order, so the
-// corners are the scalar apply's (a zero-weight corner in a group with weighted ones adds
-// zeros where the scalar code skips it). The Newmark solve's iterations spend most of their
-// time here (docs/benchmarks.md). In float, eight cells at a time, for the opt-in solve whose
-// element arithmetic is single precision (runtime/solvers.cpp, SSC_CPU_SINGLE_APPLY).
+// four (AVX2 where the CPU has it, else SSE2 pairs), chosen at run time. Each lane does the
+// scalar code's operations in its order, so the corners are the scalar apply's (a zero-weight
+// corner in a group with weighted ones adds zeros where the scalar code skips it). The Newmark
+// solve's iterations spend most of their time here (docs/benchmarks.md). In float, eight cells
+// at a time, for the opt-in solve whose element arithmetic is single precision
+// (runtime/solvers.cpp, SSC_CPU_SINGLE_APPLY).
 #pragma once
 
 namespace ssc {

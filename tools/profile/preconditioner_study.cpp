@@ -329,7 +329,10 @@ struct BoxJacobi {
     for (size_t b = 0; b < dofs.size(); ++b)
       for (size_t k = 0; k < dofs[b].size(); ++k) box[size_t(dofs[b][k])] = int(b), local[size_t(dofs[b][k])] = int(k);
     std::vector<Eigen::MatrixXd> dense(dofs.size());
-    for (size_t b = 0; b < dofs.size(); ++b) dense[b] = Eigen::MatrixXd::Zero(long(dofs[b].size()), long(dofs[b].size()));
+    for (size_t b = 0; b < dofs.size(); ++b) {
+      const long m = long(dofs[b].size());
+      dense[b] = Eigen::MatrixXd::Zero(m, m);
+    }
     for (int k = 0; k < s.A.outerSize(); ++k)
       for (Sparse::InnerIterator e(s.A, k); e; ++e)
         if (box[size_t(e.row())] == box[size_t(e.col())])
@@ -408,9 +411,11 @@ int main(int argc, char** argv) {
     for (const std::string& f : files) {
       const System s = read_system(f);
       const Vector inv_diag = s.A.diagonal().cwiseInverse();
-      std::printf("%s: Jacobi %d", f.c_str(),
-                  pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return Vector(inv_diag.cwiseProduct(r)); }, tol, 20000));
-      for (const auto& b : std::vector<std::array<int, 3>>{{1, 1, 1}, {2, 2, 2}, {2, 2, 4}, {2, 4, 4}, {3, 3, 3}, {4, 4, 4}, {4, 4, 8}}) {
+      auto jacobi = [&](const Vector& r) { return Vector(inv_diag.cwiseProduct(r)); };
+      std::printf("%s: Jacobi %d", f.c_str(), pcg(s.A, s.rhs, s.guess, jacobi, tol, 20000));
+      const std::vector<std::array<int, 3>> sizes = {{1, 1, 1}, {2, 2, 2}, {2, 2, 4}, {2, 4, 4},
+                                                     {3, 3, 3}, {4, 4, 4}, {4, 4, 8}};
+      for (const auto& b : sizes) {
         const BoxJacobi M(s, b[0], b[1], b[2]);
         std::printf("; boxes %dx%dx%d (%zu, largest %zu dofs) %d", b[0], b[1], b[2], M.dofs.size(), M.largest(),
                     pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return M.apply(r); }, tol, 20000));
