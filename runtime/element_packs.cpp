@@ -72,8 +72,8 @@ __attribute__((target_clones("avx2", "default"), flatten)) void apply_four(int f
   apply_pack<double, 4>(first, h, rotation, weights, lambda, mu, p, cell_nodes, corner);
 }
 
-// Eight doubles in one AVX-512 register (docs/benchmarks.md: 1.3-1.45x on the dragon's CPU
-// step against four).
+// Eight doubles in one AVX-512 register (the dragon's CPU step against four: docs/benchmarks.md,
+// session 36).
 __attribute__((target("avx512f"), flatten)) void apply_eight_wide(int first, double h, const double* rotation,
                                                                  const double* weights, const double* lambda,
                                                                  const double* mu, const double* p,
