@@ -108,6 +108,12 @@ int pcg(const Sparse& A, const Vector& b, Vector x, const std::function<Vector(c
   return max_iterations + 1;
 }
 
+// Iterations of PCG preconditioned by Jacobi, the engine's solve.
+int jacobi_pcg_iterations(const System& s, const Vector& inv_diag, double tol, int max_iterations) {
+  return pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return Vector(inv_diag.cwiseProduct(r)); }, tol,
+             max_iterations);
+}
+
 // The Jacobi-PCG iterates in three orders of the same recurrences: the engine's (pcg above), the
 // GPU's Chronopoulos-Gear form (one reduction an iteration, the sums gamma = r.u, delta = (A u).u
 // and |r|^2 after the operator product) and the pipelined form of Ghysels and Vanroose (2014),
@@ -392,8 +398,7 @@ int main(int argc, char** argv) {
     for (const std::string& f : files) {
       const System s = read_system(f);
       const Vector inv_diag = s.A.diagonal().cwiseInverse();
-      const int engine = pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return Vector(inv_diag.cwiseProduct(r)); }, tol,
-                             20000);
+      const int engine = jacobi_pcg_iterations(s, inv_diag, tol, 20000);
       std::printf("%s: Jacobi PCG %d iterations", f.c_str(), engine);
       for (const bool single : {false, true})
         for (const CgForm form : {CgForm::ChronopoulosGear, CgForm::Pipelined}) {
@@ -411,8 +416,7 @@ int main(int argc, char** argv) {
     for (const std::string& f : files) {
       const System s = read_system(f);
       const Vector inv_diag = s.A.diagonal().cwiseInverse();
-      auto jacobi = [&](const Vector& r) { return Vector(inv_diag.cwiseProduct(r)); };
-      std::printf("%s: Jacobi %d", f.c_str(), pcg(s.A, s.rhs, s.guess, jacobi, tol, 20000));
+      std::printf("%s: Jacobi %d", f.c_str(), jacobi_pcg_iterations(s, inv_diag, tol, 20000));
       const std::vector<std::array<int, 3>> sizes = {{1, 1, 1}, {2, 2, 2}, {2, 2, 4}, {2, 4, 4},
                                                      {3, 3, 3}, {4, 4, 4}, {4, 4, 8}};
       for (const auto& b : sizes) {
@@ -497,7 +501,7 @@ int main(int argc, char** argv) {
                   pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return two_level.cycle(0, r); }, tol, 2000));
       const int cw = pcg(s.A, s.rhs, s.guess, componentwise, tol, 2000);
       std::printf("%s: componentwise %d; ", f.c_str(), cw);
-      const int jacobi = pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return Vector(inv_diag.cwiseProduct(r)); }, tol, 2000);
+      const int jacobi = jacobi_pcg_iterations(s, inv_diag, tol, 2000);
       const int it = pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return Vector(factor.solve(r)); }, tol, 2000);
       std::printf("%s: Jacobi %d iterations; the first file's factor %d\n", f.c_str(), jacobi, it);
     }
@@ -506,7 +510,7 @@ int main(int argc, char** argv) {
   for (const std::string& f : files) {
     const System s = read_system(f);
     const Vector inv_diag = s.A.diagonal().cwiseInverse();
-    const int jacobi = pcg(s.A, s.rhs, s.guess, [&](const Vector& r) { return Vector(inv_diag.cwiseProduct(r)); }, tol, 2000);
+    const int jacobi = jacobi_pcg_iterations(s, inv_diag, tol, 2000);
     std::printf("%s: %d nodes, %ld nonzeros; Jacobi PCG %d iterations (cost %d)\n", f.c_str(), s.nodes, long(s.A.nonZeros()),
                 jacobi, jacobi);
     const double lambda_max = 1.05 * largest_jacobi_eigenvalue(s.A, inv_diag);
